@@ -1,0 +1,80 @@
+#include "convert.h"
+
+#include <cstring>
+
+#include "glint/errors.h"
+#include "glint/options.h"
+
+namespace glint::py {
+
+namespace {
+
+std::string shape_of(const pyb::array& a) {
+  std::string s = "(";
+  for (pyb::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+std::string dtype_of(const pyb::array& a) { return pyb::str(a.dtype()).cast<std::string>(); }
+
+pyb::array as_array(const pyb::handle& obj, const char* name) {
+  if (!pyb::isinstance<pyb::array>(obj))
+    throw InvalidArgument(name, "expected a numpy array, got " +
+                                    pyb::str(pyb::type::of(obj).attr("__name__")).cast<std::string>());
+  return pyb::reinterpret_borrow<pyb::array>(obj);
+}
+
+}  // namespace
+
+Image image_from_array(const pyb::handle& obj, const char* name, float fill_alpha, int min_channels) {
+  pyb::array a = as_array(obj, name);
+  if (!a.dtype().is(pyb::dtype::of<float>()))
+    throw InvalidArgument(name, "expected dtype float32, got " + dtype_of(a));
+  if (a.ndim() != 3 || a.shape(2) < min_channels || a.shape(2) > 4)
+    throw InvalidArgument(name, "expected shape (H, W, " +
+                                    (min_channels == 4 ? std::string("4") : std::to_string(min_channels) + " to 4") +
+                                    "), got " + shape_of(a));
+  const auto h = a.shape(0), w = a.shape(1), c = a.shape(2);
+  if (h <= 0 || w <= 0) throw InvalidArgument(name, "expected a non-empty image, got shape " + shape_of(a));
+  if (h > kMaxImageSide || w > kMaxImageSide)
+    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
+                                    " pixels a side, got shape " + shape_of(a));
+  // Accept any strides (a transposed or sliced view) by going through a
+  // C-contiguous copy only when needed.
+  auto contiguous = pyb::array_t<float, pyb::array::c_style | pyb::array::forcecast>::ensure(a);
+  Image img(static_cast<int>(w), static_cast<int>(h));
+  const float* src = contiguous.data();
+  if (c == 4) {
+    std::memcpy(img.data.data(), src, img.data.size() * sizeof(float));
+  } else {
+    const size_t n = img.pixel_count();
+    for (size_t i = 0; i < n; ++i) {
+      for (pyb::ssize_t k = 0; k < c; ++k) img.data[i * 4 + k] = src[i * c + k];
+      for (pyb::ssize_t k = c; k < 4; ++k) img.data[i * 4 + k] = (k == 3) ? fill_alpha : 0.0f;
+    }
+  }
+  return img;
+}
+
+pyb::array_t<float> array_from_image(const Image& img) {
+  pyb::array_t<float> out({static_cast<pyb::ssize_t>(img.height), static_cast<pyb::ssize_t>(img.width),
+                           static_cast<pyb::ssize_t>(4)});
+  if (!img.data.empty()) std::memcpy(out.mutable_data(), img.data.data(), img.data.size() * sizeof(float));
+  return out;
+}
+
+Mat4 projection_from_array(const pyb::handle& obj) {
+  pyb::array a = as_array(obj, "projection");
+  const bool f32 = a.dtype().is(pyb::dtype::of<float>());
+  const bool f64 = a.dtype().is(pyb::dtype::of<double>());
+  if (!f32 && !f64) throw InvalidArgument("projection", "expected dtype float32 or float64, got " + dtype_of(a));
+  if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
+    throw InvalidArgument("projection", "expected shape (4, 4), got " + shape_of(a));
+  auto d = pyb::array_t<double, pyb::array::c_style | pyb::array::forcecast>::ensure(a);
+  Mat4 m;
+  for (int i = 0; i < 16; ++i) m.m[i] = d.data()[i];
+  validate_projection(m);
+  return m;
+}
+
+}  // namespace glint::py

@@ -1,0 +1,25 @@
+// numpy <-> glint::Image and friends, shared by every binding file.
+#pragma once
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <string>
+
+#include "glint/image.h"
+#include "glint/projection.h"
+
+namespace glint::py {
+
+namespace pyb = pybind11;
+
+// A float32 [H, W, C] array (C = 3 or 4, or C = `min_channels`..4) as an RGBA
+// Image; a 3-channel input gets `fill_alpha` in the 4th channel. Anything
+// else raises ValueError naming `name`.
+Image image_from_array(const pyb::handle& obj, const char* name, float fill_alpha = 1.0f,
+                       int min_channels = 3);
+// An RGBA Image as a new float32 [H, W, 4] array.
+pyb::array_t<float> array_from_image(const Image& img);
+// A 4x4 float32/float64 array (rows as printed) as a validated Mat4.
+Mat4 projection_from_array(const pyb::handle& obj);
+
+}  // namespace glint::py

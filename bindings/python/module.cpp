@@ -1,0 +1,203 @@
+// glint_core: the Python face of the Glint core. Arrays in, arrays out; the
+// GIL is released while a stage runs so Blender's UI and other threads go on.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "convert.h"
+#include "glint/backend.h"
+#include "glint/errors.h"
+#include "glint/pipeline.h"
+
+namespace pyb = pybind11;
+using namespace pybind11::literals;
+
+namespace glint::py {
+
+
+namespace {
+
+TraceOptions trace_options(float max_distance, float resolution, int steps, float thickness,
+                           const std::string& march) {
+  TraceOptions o;
+  o.max_distance = max_distance;
+  o.resolution = resolution;
+  o.steps = steps;
+  o.thickness = thickness;
+  o.march = parse_march(march);
+  validate(o);
+  return o;
+}
+
+pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& normal,
+                             const pyb::handle& projection, float max_distance, float resolution,
+                             int steps, float thickness, const std::string& march,
+                             const std::string& backend, int threads) {
+  const Image pos = image_from_array(position, "position", 1.0f, 4);
+  const Image nrm = image_from_array(normal, "normal", 0.0f, 3);
+  require_same_size(pos, "position", nrm, "normal");
+  const Mat4 proj = projection_from_array(projection);
+  const TraceOptions opt = trace_options(max_distance, resolution, steps, thickness, march);
+  auto be = get_backend(backend, threads);
+  Image uv;
+  {
+    pyb::gil_scoped_release release;
+    uv = be->trace(TraceInputs{pos, nrm, nullptr, proj}, opt);
+  }
+  return array_from_image(uv);
+}
+
+pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
+                      const pyb::handle& specular, const pyb::handle& color,
+                      const pyb::handle& projection, float max_distance, float resolution,
+                      int steps, float thickness, const std::string& march, int blur_size,
+                      float blur_separation, const std::string& combine,
+                      const std::string& backend, int threads) {
+  PipelineInputs in;
+  in.position = image_from_array(position, "position", 1.0f, 4);
+  in.normal = image_from_array(normal, "normal", 0.0f, 3);
+  in.specular = image_from_array(specular, "specular", 0.0f, 4);
+  in.color = image_from_array(color, "color", 1.0f, 3);
+  in.projection = projection_from_array(projection);
+  PipelineOptions opt;
+  opt.trace = trace_options(max_distance, resolution, steps, thickness, march);
+  opt.blur.size = blur_size;
+  opt.blur.separation = blur_separation;
+  opt.combine = parse_combine(combine);
+  opt.threads = threads;
+  validate(opt);
+  auto be = get_backend(backend, threads);
+  PipelineResult res;
+  {
+    pyb::gil_scoped_release release;
+    res = run_pipeline(*be, in, opt);
+  }
+  pyb::dict out;
+  for (const auto& name : pipeline_layer_names()) out[name.c_str()] = array_from_image(res.layers.at(name));
+  pyb::dict timings;
+  pyb::list skipped;
+  for (const auto& t : res.timings) {
+    timings[t.stage.c_str()] = t.milliseconds;
+    if (t.skipped) skipped.append(t.stage);
+  }
+  out["stats"] = pyb::dict("backend"_a = be->name(), "timings_ms"_a = timings, "skipped"_a = skipped,
+                           "reflective_pixels"_a = res.reflective_pixels,
+                           "rough_pixels"_a = res.rough_pixels);
+  return out;
+}
+
+}  // namespace
+}  // namespace glint::py
+
+PYBIND11_MODULE(glint_core, m) {
+  using namespace glint;
+  using namespace glint::py;
+  m.doc() =
+      "Glint: screen-space reflections (the seed chapter's pipeline) on numpy arrays.\n"
+      "Images are float32 [H, W, C], row 0 at the bottom; view space is Blender's camera space.";
+
+  static pyb::exception<BackendUnavailable> backend_unavailable(m, "BackendUnavailable",
+                                                                PyExc_RuntimeError);
+  pyb::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InvalidArgument& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const BackendUnavailable& e) {
+      PyErr_SetString(backend_unavailable.ptr(), e.what());
+    }
+  });
+
+  m.attr("__version__") = "0.1.0";
+  m.attr("LAYERS") = pyb::cast(pipeline_layer_names());
+  m.attr("MAX_SHININESS") = kMaxShininess;
+  m.attr("MAX_STEPS") = kMaxSteps;
+
+  m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
+        "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
+        "march"_a = "seed", "backend"_a = "cpu", "threads"_a = 0,
+        "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
+        "max_distance and thickness are view-space units; resolution in [0, 1];\n"
+        "march = 'seed' (two-pass) or 'linear' (the book's older march).");
+
+  m.def("pipeline", &py_pipeline, "position"_a, "normal"_a, "specular"_a, "color"_a, "projection"_a,
+        pyb::kw_only(), "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10,
+        "thickness"_a = 0.5f, "march"_a = "seed", "blur_size"_a = 8, "blur_separation"_a = 1.0f,
+        "combine"_a = "over", "backend"_a = "cpu", "threads"_a = 0,
+        "The whole pipeline. Returns a dict of float32 [H, W, 4] layers named by LAYERS\n"
+        "('uv', 'reflection_color', 'reflection_blur', 'reflection', 'combined') and\n"
+        "'stats': backend used, per-stage timings_ms, skipped stages, pixel counts.");
+
+  m.def(
+      "reflection_color",
+      [](const pyb::handle& uv, const pyb::handle& color, const std::string& backend) {
+        Image u = image_from_array(uv, "uv", 0.0f, 4), c = image_from_array(color, "color", 1.0f, 3);
+        auto be = get_backend(backend);
+        pyb::gil_scoped_release release;
+        Image r = be->reflection_color(u, c);
+        pyb::gil_scoped_acquire acquire;
+        return array_from_image(r);
+      },
+      "uv"_a, "color"_a, pyb::kw_only(), "backend"_a = "cpu",
+      "Colour at the reflected uv (bilinear, clamp to edge), premultiplied by visibility.");
+
+  m.def(
+      "box_blur",
+      [](const pyb::handle& image, int size, float separation, const std::string& backend) {
+        Image src = image_from_array(image, "image", 1.0f, 3);
+        BlurOptions o;
+        o.size = size;
+        o.separation = separation;
+        validate(o);
+        auto be = get_backend(backend);
+        pyb::gil_scoped_release release;
+        Image r = be->box_blur(src, o, nullptr);
+        pyb::gil_scoped_acquire acquire;
+        return array_from_image(r);
+      },
+      "image"_a, pyb::kw_only(), "size"_a = 8, "separation"_a = 1.0f, "backend"_a = "cpu",
+      "(2 * size + 1)^2 box average of all four channels, taps `separation` pixels apart.");
+
+  m.def(
+      "reflection",
+      [](const pyb::handle& color, const pyb::handle& blurred, const pyb::handle& specular,
+         const std::string& backend) {
+        Image c = image_from_array(color, "reflection_color", 0.0f, 4);
+        Image b = image_from_array(blurred, "reflection_blur", 0.0f, 4);
+        Image s = image_from_array(specular, "specular", 0.0f, 4);
+        auto be = get_backend(backend);
+        pyb::gil_scoped_release release;
+        Image r = be->reflection(c, b, s);
+        pyb::gil_scoped_acquire acquire;
+        return array_from_image(r);
+      },
+      "reflection_color"_a, "reflection_blur"_a, "specular"_a, pyb::kw_only(), "backend"_a = "cpu",
+      "mix(colour, blurred, roughness) * specular amount, roughness = 1 - shininess.");
+
+  m.def(
+      "combine",
+      [](const pyb::handle& base, const pyb::handle& reflection, const std::string& mode,
+         const std::string& backend) {
+        Image b = image_from_array(base, "color", 1.0f, 3);
+        Image r = image_from_array(reflection, "reflection", 0.0f, 4);
+        const Combine c = parse_combine(mode);
+        auto be = get_backend(backend);
+        pyb::gil_scoped_release release;
+        Image out = be->combine(b, r, c);
+        pyb::gil_scoped_acquire acquire;
+        return array_from_image(out);
+      },
+      "color"_a, "reflection"_a, pyb::kw_only(), "mode"_a = "over", "backend"_a = "cpu",
+      "'over': base * (1 - a) + reflection.rgb (visibility once); 'seed': the demo's mix.");
+
+  m.def("shininess_to_alpha", &shininess_to_alpha, "shininess"_a,
+        "clamp(shininess / 127.75, 0, 1): the specular buffer's alpha.");
+  m.def("shininess_from_hardness", &shininess_from_hardness, "hardness"_a,
+        "Blender Internal hardness (1..511) to shininess: hardness / 4 (511 -> 127.75).");
+  m.def("gl_compiled_in", &gl_compiled_in, "True when this build has the OpenGL backend.");
+  m.def(
+      "backend_name",
+      [](const std::string& backend) { return get_backend(backend)->name(); }, "backend"_a = "auto",
+      "The backend a name resolves to ('auto' -> 'gl' or 'cpu'); raises BackendUnavailable.");
+
+}

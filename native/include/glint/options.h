@@ -1,0 +1,58 @@
+// Every knob of the pipeline, with units and defaults, in one place.
+// Defaults are the seed chapter's (maxDistance 15, resolution 0.3, steps 10,
+// thickness 0.5) and the book's blur (size 8, separation 1: a 17x17 box).
+#pragma once
+#include <string>
+
+namespace glint {
+
+enum class March {
+  Seed,    // the chapter's two-pass march: coarse pass + bisection
+  Linear,  // the book's older single march: fixed view-space steps, step back on a hit
+};
+
+enum class Combine {
+  Over,  // base * (1 - reflection.a) + reflection.rgb: visibility applied once (default)
+  Seed,  // mix(base, reflection.rgb, reflection.a): the demo's base-combine, visibility twice
+};
+
+struct TraceOptions {
+  float max_distance = 15.0f;  // view-space units (Blender units): longest reflected ray
+  float resolution = 0.3f;     // [0, 1]: share of the on-screen pixels the coarse pass visits
+                               // (ignored by March::Linear)
+  int steps = 10;              // Seed: bisection iterations; Linear: view-space steps
+  float thickness = 0.5f;      // view-space units: how far behind a surface still counts as a hit
+  March march = March::Seed;
+};
+
+struct BlurOptions {
+  int size = 8;             // half-width in taps: the box is (2 * size + 1)^2 taps; 0 = no blur
+  float separation = 1.0f;  // pixels between taps (>= 1, as the book clamps it)
+};
+
+struct PipelineOptions {
+  TraceOptions trace;
+  BlurOptions blur;
+  Combine combine = Combine::Over;
+  int threads = 0;  // CPU worker threads; 0 = one per hardware thread
+};
+
+// Throw InvalidArgument naming the offending field (Python keyword names).
+void validate(const TraceOptions& o);
+void validate(const BlurOptions& o);
+void validate(const PipelineOptions& o);
+
+// Name <-> enum, for the bindings, the CLI and EXR headers.
+March parse_march(const std::string& name);      // "seed" | "linear"
+Combine parse_combine(const std::string& name);  // "over" | "seed"
+const char* to_string(March m);
+const char* to_string(Combine c);
+
+// Limits, public so that docs, bindings and tests quote the same numbers.
+constexpr int kMaxSteps = 1000000;
+constexpr double kMaxDistanceLimit = 1e12;  // past this float32 view positions carry no digits
+constexpr int kMaxBlurSize = 128;
+constexpr float kMaxBlurSeparation = 64.0f;
+constexpr int kMaxImageSide = 32768;
+
+}  // namespace glint

@@ -1,0 +1,246 @@
+// The CPU reference backend: every stage as plain loops over rows, run on a
+// small thread pool. This is the backend the others are checked against.
+#include <algorithm>
+#include <cmath>
+
+#include "glint/errors.h"
+#include "glint/stages.h"
+#include "march.h"
+#include "parallel.h"
+
+namespace glint {
+namespace {
+
+inline bool finite4(const float* p) {
+  return p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f && p[3] - p[3] == 0.0f;
+}
+inline float clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
+
+// A colour texel for sampling: non-finite values (an Inf sun, a NaN from a
+// broken pass) read as black so that they cannot leave the core.
+inline void texel_rgba(const Image& img, int x, int y, float out[4]) {
+  const float* p = img.px(x, y);
+  for (int c = 0; c < 4; ++c) out[c] = (p[c] - p[c] == 0.0f) ? p[c] : 0.0f;
+}
+
+// Bilinear sample with clamp-to-edge, as GL_LINEAR + GL_CLAMP_TO_EDGE does.
+void sample_bilinear(const Image& img, float u, float v, float out[4]) {
+  const float tx = u * static_cast<float>(img.width) - 0.5f;
+  const float ty = v * static_cast<float>(img.height) - 0.5f;
+  const float fx0 = std::floor(tx), fy0 = std::floor(ty);
+  const float ax = tx - fx0, ay = ty - fy0;
+  auto clampi = [](float f, int hi) {
+    if (!(f >= 0.0f)) return 0;
+    return f > static_cast<float>(hi) ? hi : static_cast<int>(f);
+  };
+  const int x0 = clampi(fx0, img.width - 1), x1 = clampi(fx0 + 1.0f, img.width - 1);
+  const int y0 = clampi(fy0, img.height - 1), y1 = clampi(fy0 + 1.0f, img.height - 1);
+  float a[4], b[4], c[4], d[4];
+  texel_rgba(img, x0, y0, a);
+  texel_rgba(img, x1, y0, b);
+  texel_rgba(img, x0, y1, c);
+  texel_rgba(img, x1, y1, d);
+  for (int k = 0; k < 4; ++k) {
+    const float bottom = a[k] * (1.0f - ax) + b[k] * ax;
+    const float top = c[k] * (1.0f - ax) + d[k] * ax;
+    out[k] = bottom * (1.0f - ay) + top * ay;
+  }
+}
+
+// One tap of the blur along an axis: position p in texel units (integer p is
+// a texel centre), linearly interpolated and clamped to the edge.
+inline float tap_1d(const float* line, ptrdiff_t stride, int n, float p, int c) {
+  const float f0 = std::floor(p);
+  const float a = p - f0;
+  int i0 = static_cast<int>(f0);
+  int i1 = i0 + 1;
+  i0 = std::clamp(i0, 0, n - 1);
+  i1 = std::clamp(i1, 0, n - 1);
+  const float v0 = line[i0 * stride + c], v1 = line[i1 * stride + c];
+  return a == 0.0f ? v0 : v0 * (1.0f - a) + v1 * a;
+}
+
+class CpuBackend final : public Backend {
+ public:
+  explicit CpuBackend(int threads) : threads_(threads) {}
+  std::string name() const override { return "cpu"; }
+
+  Image trace(const TraceInputs& in, const TraceOptions& opt) override {
+    require_image(in.position, "position");
+    require_same_size(in.position, "position", in.normal, "normal");
+    if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
+    validate(opt);
+    validate_projection(in.projection);
+    Image out(in.position.width, in.position.height);
+    const cpu::MarchSetup setup = cpu::make_setup(in.position, in.normal, in.projection, opt);
+    const bool linear = opt.march == March::Linear;
+    const Image* spec = in.specular;
+    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+      for (int x = 0; x < out.width; ++x) {
+        if (spec && !is_reflective(spec->px(x, y))) continue;  // the seed returns early here
+        if (linear)
+          cpu::march_linear(setup, x, y, out.px(x, y));
+        else
+          cpu::march_seed(setup, x, y, out.px(x, y));
+      }
+    });
+    return out;
+  }
+
+  Image reflection_color(const Image& uv, const Image& color) override {
+    require_image(uv, "uv");
+    require_image(color, "color");
+    Image out(uv.width, uv.height);
+    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+      for (int x = 0; x < out.width; ++x) {
+        const float* t = uv.px(x, y);
+        const float alpha = clamp01(t[2]);
+        if (!(alpha > 0.0f) || !finite4(t)) continue;
+        float c[4];
+        sample_bilinear(color, t[0], t[1], c);
+        float* o = out.px(x, y);
+        o[0] = c[0] * alpha;
+        o[1] = c[1] * alpha;
+        o[2] = c[2] * alpha;
+        o[3] = alpha;
+      }
+    });
+    return out;
+  }
+
+  Image box_blur(const Image& src, const BlurOptions& opt, const int* region) override {
+    require_image(src, "image");
+    validate(opt);
+    Image out = src;
+    if (opt.size == 0) return out;
+    int x0 = 0, y0 = 0, x1 = src.width, y1 = src.height;
+    if (region) {
+      x0 = std::max(0, region[0]);
+      y0 = std::max(0, region[1]);
+      x1 = std::min(src.width, region[2]);
+      y1 = std::min(src.height, region[3]);
+    }
+    if (x0 >= x1 || y0 >= y1) return out;
+    // Separable: clamp-to-edge and linear taps both factor per axis, so the
+    // (2s+1)^2 box equals a horizontal pass followed by a vertical one.
+    const int size = opt.size;
+    const float sep = std::max(opt.separation, 1.0f);
+    const int reach = static_cast<int>(std::ceil(size * sep)) + 1;
+    const int hy0 = std::max(0, y0 - reach), hy1 = std::min(src.height, y1 + reach);
+    const int w = x1 - x0;
+    std::vector<float> horiz(static_cast<size_t>(hy1 - hy0) * w * 4);
+    cpu::parallel_rows(hy0, hy1, threads_, [&](int y) {
+      const float* line = src.px(0, y);
+      float* dst = horiz.data() + static_cast<size_t>(y - hy0) * w * 4;
+      for (int x = x0; x < x1; ++x) {
+        float acc[4] = {0, 0, 0, 0};
+        for (int i = -size; i <= size; ++i) {
+          const float p = static_cast<float>(x) + static_cast<float>(i) * sep;
+          for (int c = 0; c < 4; ++c) acc[c] += tap_1d(line, 4, src.width, p, c);
+        }
+        for (int c = 0; c < 4; ++c) dst[(x - x0) * 4 + c] = acc[c];
+      }
+    });
+    const float norm = 1.0f / static_cast<float>((2 * size + 1) * (2 * size + 1));
+    cpu::parallel_rows(y0, y1, threads_, [&](int y) {
+      for (int x = x0; x < x1; ++x) {
+        // The column of horizontal sums, indexed by absolute row, clamped to
+        // the image: rows outside [hy0, hy1) are never reached.
+        const float* column = horiz.data() + static_cast<size_t>(x - x0) * 4 -
+                              static_cast<ptrdiff_t>(hy0) * w * 4;
+        float acc[4] = {0, 0, 0, 0};
+        for (int j = -size; j <= size; ++j) {
+          const float p = static_cast<float>(y) + static_cast<float>(j) * sep;
+          for (int c = 0; c < 4; ++c) acc[c] += tap_1d(column, static_cast<ptrdiff_t>(w) * 4, src.height, p, c);
+        }
+        float* o = out.px(x, y);
+        for (int c = 0; c < 4; ++c) o[c] = acc[c] * norm;
+      }
+    });
+    return out;
+  }
+
+  Image reflection(const Image& color, const Image& blurred, const Image& specular) override {
+    require_image(color, "reflection_color");
+    require_same_size(color, "reflection_color", blurred, "reflection_blur");
+    require_same_size(color, "reflection_color", specular, "specular");
+    Image out(color.width, color.height);
+    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+      for (int x = 0; x < out.width; ++x) {
+        const float* s = specular.px(x, y);
+        if (!is_reflective(s)) continue;
+        const float amount = specular_amount(s);
+        // Shininess outside [0, 1] is clamped: the seed's 1 - min(a, 1) would
+        // let a negative value extrapolate past the blurred colour.
+        const float roughness = 1.0f - clamp01(s[3] - s[3] == 0.0f ? s[3] : 1.0f);
+        const float* c = color.px(x, y);
+        const float* b = blurred.px(x, y);
+        float* o = out.px(x, y);
+        for (int k = 0; k < 4; ++k) o[k] = (c[k] * (1.0f - roughness) + b[k] * roughness) * amount;
+      }
+    });
+    return out;
+  }
+
+  Image combine(const Image& base, const Image& reflection, Combine mode) override {
+    require_image(base, "color");
+    require_same_size(base, "color", reflection, "reflection");
+    Image out(base.width, base.height);
+    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+      for (int x = 0; x < out.width; ++x) {
+        const float* b = base.px(x, y);
+        const float* r = reflection.px(x, y);
+        float* o = out.px(x, y);
+        const float a = clamp01(r[3]);
+        for (int k = 0; k < 3; ++k) {
+          o[k] = mode == Combine::Over ? b[k] * (1.0f - a) + r[k] : b[k] * (1.0f - a) + r[k] * a;
+        }
+        o[3] = b[3];
+      }
+    });
+    return out;
+  }
+
+ private:
+  int threads_;
+};
+
+}  // namespace
+
+bool is_reflective(const float* spec) {
+  const float amount = specular_amount(spec);
+  return amount > 0.0f && amount - amount == 0.0f;
+}
+
+float shininess_to_alpha(float shininess) {
+  const float a = shininess / kMaxShininess;
+  if (!(a > 0.0f)) return 0.0f;
+  return a > 1.0f ? 1.0f : a;
+}
+
+void require_image(const Image& img, const char* name) {
+  if (img.width <= 0 || img.height <= 0)
+    throw InvalidArgument(name, "expected a non-empty image, got " + std::to_string(img.width) +
+                                    "x" + std::to_string(img.height));
+  if (img.width > kMaxImageSide || img.height > kMaxImageSide)
+    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
+                                    " pixels a side, got " + std::to_string(img.width) + "x" +
+                                    std::to_string(img.height));
+  if (img.data.size() != img.pixel_count() * 4)
+    throw InvalidArgument(name, "pixel storage does not match its size");
+}
+
+void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name) {
+  require_image(b, b_name);
+  if (a.width != b.width || a.height != b.height)
+    throw InvalidArgument(b_name, std::string("expected the size of ") + a_name + " (" +
+                                      std::to_string(a.width) + "x" + std::to_string(a.height) +
+                                      "), got " + std::to_string(b.width) + "x" +
+                                      std::to_string(b.height));
+}
+
+std::unique_ptr<Backend> make_cpu_backend(int threads) {
+  return std::make_unique<CpuBackend>(threads);
+}
+
+}  // namespace glint

@@ -1,0 +1,357 @@
+// The seed chapter's two-pass march ("seed") and the book's older linear
+// march ("linear"), ported to Blender's camera space (view distance = -z).
+// The only departures from the seed are SPEC.md's four fixes, each marked
+// FIX n below, plus work skipping that cannot change the result (marked SKIP).
+#include "march.h"
+
+#include <cmath>
+#include <cstdint>
+
+namespace glint::cpu {
+namespace {
+
+struct V3 {
+  float x, y, z;
+};
+inline V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3 operator*(V3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
+inline float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline float length(V3 a) { return std::sqrt(dot(a, a)); }
+inline V3 normalize(V3 a) { return a * (1.0f / length(a)); }
+inline V3 reflect(V3 i, V3 n) { return i - n * (2.0f * dot(n, i)); }
+inline bool finite(float v) { return v - v == 0.0f; }
+inline bool finite(V3 v) { return finite(v.x) && finite(v.y) && finite(v.z); }
+inline float clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
+inline float mixf(float a, float b, float t) { return a * (1.0f - t) + b * t; }
+
+// clip = P * (v, 1), in float as the shader does it.
+inline void clip_of(const float* P, V3 v, float c[4]) {
+  for (int r = 0; r < 4; ++r) c[r] = P[r * 4 + 0] * v.x + P[r * 4 + 1] * v.y + P[r * 4 + 2] * v.z + P[r * 4 + 3];
+}
+
+inline double clip_row(const double* P, int r, double x, double y, double z) {
+  return P[r * 4 + 0] * x + P[r * 4 + 1] * y + P[r * 4 + 2] * z + P[r * 4 + 3];
+}
+
+// View distance: how far in front of the camera a point is.
+inline float view_distance(V3 v) { return -v.z; }
+
+// FIX 3: nearest texel at floor(uv * size); outside the image or on an
+// unseen texel is a miss. On a miss `out` is zeroed (w = 0).
+inline bool fetch_position(const Image& pos, float u, float v, float out[4]) {
+  const float fx = std::floor(u * static_cast<float>(pos.width));
+  const float fy = std::floor(v * static_cast<float>(pos.height));
+  if (fx >= 0.0f && fx < static_cast<float>(pos.width) && fy >= 0.0f &&
+      fy < static_cast<float>(pos.height)) {
+    const float* p = pos.px(static_cast<int>(fx), static_cast<int>(fy));
+    if (texel_seen(p)) {
+      out[0] = p[0]; out[1] = p[1]; out[2] = p[2]; out[3] = p[3];
+      return true;
+    }
+  }
+  out[0] = out[1] = out[2] = out[3] = 0.0f;
+  return false;
+}
+
+// Reads the pixel's own position and normal; false where the seed reports 0.
+// FIX 4: unseen pixels, zero or non-finite normals, and a position at the eye
+// (which has no direction) give (0, 0, 0, 0) instead of NaN.
+inline bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_from, V3& normal) {
+  const float* p = s.position->px(x, y);
+  if (!texel_seen(p)) return false;
+  const float* n = s.normal->px(x, y);
+  normal = {n[0], n[1], n[2]};
+  if (!finite(normal) || dot(normal, normal) == 0.0f) return false;
+  from = {p[0], p[1], p[2]};
+  if (dot(from, from) == 0.0f) return false;
+  unit_from = normalize(from);
+  normal = normalize(normal);
+  return finite(unit_from) && finite(normal);
+}
+
+// FIX 2: the length of the ray, shortened so that its end stays on or in
+// front of the near plane (clip z >= -w) with w > 0. The plane test is
+// linear along the ray, so the crossing is solved in double; float rounding
+// of the end point is then checked and, at the extremes (a far point 1e7
+// away with a 1e-4 near plane), the ray halved until the end is valid.
+// Returns a negative length where the origin itself is not in front.
+float clipped_length(const MarchSetup& s, V3 from, V3 dir, float max_distance) {
+  const double* P = s.projd;
+  auto near_fn = [&](double x, double y, double z) {
+    return clip_row(P, 2, x, y, z) + clip_row(P, 3, x, y, z);
+  };
+  const double n0 = near_fn(from.x, from.y, from.z);
+  if (!(n0 >= 0.0) || !(clip_row(P, 3, from.x, from.y, from.z) > 0.0)) return -1.0f;
+  double len = max_distance;
+  const double n1 = near_fn(from.x + dir.x * len, from.y + dir.y * len, from.z + dir.z * len);
+  if (n1 < 0.0) len = len * (n0 / (n0 - n1));
+  float lf = static_cast<float>(len);
+  for (int i = 0; i < 64; ++i) {
+    const V3 e = from + dir * lf;
+    if (near_fn(e.x, e.y, e.z) >= 0.0 && clip_row(P, 3, e.x, e.y, e.z) > 0.0) return lf;
+    lf *= 0.5f;
+  }
+  return 0.0f;
+}
+
+// startFrag / endFrag of the seed: projected, divided, to pixel coordinates.
+inline bool to_frag(const float* P, V3 v, float w, float h, float frag[2]) {
+  float c[4];
+  clip_of(P, v, c);
+  if (!(c[3] > 0.0f)) return false;
+  frag[0] = (c[0] / c[3] * 0.5f + 0.5f) * w;
+  frag[1] = (c[1] / c[3] * 0.5f + 0.5f) * h;
+  return finite(frag[0]) && finite(frag[1]);
+}
+
+// SKIP: the range of first-pass sample indices k (1..n) whose sample can lie
+// on the image. Samples off the image are misses (FIX 3), and a straight line
+// that has left the image never comes back, so only this range is probed;
+// a huge max_distance then costs no more than the pixels the ray crosses.
+// A one-pixel margin keeps the range conservative against float rounding.
+void onscreen_range(double sx, double sy, double ix, double iy, int64_t n, double w, double h,
+                    int64_t& k0, int64_t& k1) {
+  double lo = 1.0, hi = static_cast<double>(n);
+  auto clip_axis = [&](double s0, double inc, double size) {
+    const double a = -1.0, b = size + 1.0;
+    if (inc == 0.0) {
+      if (s0 < a || s0 > b) hi = lo - 1.0;
+      return;
+    }
+    double t0 = (a - s0) / inc, t1 = (b - s0) / inc;
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::fmax(lo, t0);
+    hi = std::fmin(hi, t1);
+  };
+  clip_axis(sx, ix, w);
+  clip_axis(sy, iy, h);
+  if (!(lo <= hi)) {
+    k0 = 1;
+    k1 = 0;
+    return;
+  }
+  k0 = static_cast<int64_t>(std::floor(lo));
+  k1 = static_cast<int64_t>(std::ceil(hi));
+  if (k0 < 1) k0 = 1;
+  if (k1 > n) k1 = n;
+}
+
+}  // namespace
+
+MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
+                      const TraceOptions& opt) {
+  MarchSetup s;
+  s.position = &position;
+  s.normal = &normal;
+  for (int i = 0; i < 16; ++i) {
+    s.projd[i] = projection.m[i];
+    s.proj[i] = static_cast<float>(projection.m[i]);
+  }
+  s.kind = classify_projection(projection);
+  s.opt = opt;
+  return s;
+}
+
+void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
+  out[0] = out[1] = out[2] = out[3] = 0.0f;
+  V3 from, unit_from, normal;
+  if (!read_origin(s, x, y, from, unit_from, normal)) return;
+
+  const Image& pos = *s.position;
+  const float tex_w = static_cast<float>(pos.width), tex_h = static_cast<float>(pos.height);
+  const float max_distance = s.opt.max_distance;
+  const float thickness = s.opt.thickness;
+
+  const V3 pivot = normalize(reflect(unit_from, normal));
+  if (!finite(pivot)) return;
+
+  const float ray_length = clipped_length(s, from, pivot, max_distance);
+  if (ray_length < 0.0f) return;
+  const V3 start_view = from;
+  const V3 end_view = from + pivot * ray_length;
+
+  float start_frag[2], end_frag[2];
+  if (!to_frag(s.proj, start_view, tex_w, tex_h, start_frag)) return;
+  if (!to_frag(s.proj, end_view, tex_w, tex_h, end_frag)) return;
+
+  float frag[2] = {start_frag[0], start_frag[1]};
+  float uv[2] = {frag[0] / tex_w, frag[1] / tex_h};
+
+  const float delta_x = end_frag[0] - start_frag[0];
+  const float delta_y = end_frag[1] - start_frag[1];
+  // FIX 1: a branch instead of mix() of two divisions, one of which is 0/0
+  // for axis-aligned rays.
+  const bool use_x = std::fabs(delta_x) >= std::fabs(delta_y);
+  const float delta = (use_x ? std::fabs(delta_x) : std::fabs(delta_y)) * clamp01(s.opt.resolution);
+  const float inc_x = delta_x / std::fmax(delta, 0.001f);
+  const float inc_y = delta_y / std::fmax(delta, 0.001f);
+
+  const float start_vd = view_distance(start_view);
+  const float end_vd = view_distance(end_view);
+  const bool perspective = s.kind == ProjectionKind::Perspective;
+  // Depth along the ray at screen fraction t. Perspective: the seed's
+  // perspective-correct formula. Orthographic: w is constant, so depth is
+  // linear in t. Any other projection: interpolate 1/w, which reduces to
+  // both of the above.
+  float start_w = 1.0f, end_w = 1.0f;
+  if (s.kind == ProjectionKind::General) {
+    float c[4];
+    clip_of(s.proj, start_view, c);
+    start_w = c[3];
+    clip_of(s.proj, end_view, c);
+    end_w = c[3];
+  }
+  auto ray_depth = [&](float t) -> float {
+    if (perspective) return (start_vd * end_vd) / mixf(end_vd, start_vd, t);
+    if (s.kind == ProjectionKind::Orthographic) return mixf(start_vd, end_vd, t);
+    return mixf(start_vd / start_w, end_vd / end_w, t) / mixf(1.0f / start_w, 1.0f / end_w, t);
+  };
+  auto search_of = [&](float fx, float fy) {
+    return use_x ? (fx - start_frag[0]) / delta_x : (fy - start_frag[1]) / delta_y;
+  };
+
+  float search0 = 0.0f, search1 = 0.0f;
+  int hit0 = 0, hit1 = 0;
+  float depth = thickness;
+  float position_to[4] = {from.x, from.y, from.z, 1.0f};
+
+  // First pass: samples at start_frag + k * increment, k = 1 .. int(delta).
+  const int64_t n = static_cast<int64_t>(delta);
+  if (n > 0) {
+    int64_t k0, k1;
+    onscreen_range(start_frag[0], start_frag[1], inc_x, inc_y, n, tex_w, tex_h, k0, k1);
+    // The samples before k0 were all misses: search0 holds the last of them.
+    if (k0 > 1 && k0 <= k1) {
+      const float kf = static_cast<float>(k0 - 1);
+      search0 = search_of(start_frag[0] + kf * inc_x, start_frag[1] + kf * inc_y);
+    }
+    for (int64_t k = k0; k <= k1; ++k) {
+      const float kf = static_cast<float>(k);
+      frag[0] = start_frag[0] + kf * inc_x;
+      frag[1] = start_frag[1] + kf * inc_y;
+      uv[0] = frag[0] / tex_w;
+      uv[1] = frag[1] / tex_h;
+      const bool seen = fetch_position(pos, uv[0], uv[1], position_to);
+      search1 = search_of(frag[0], frag[1]);
+      depth = ray_depth(search1) - view_distance({position_to[0], position_to[1], position_to[2]});
+      if (seen && depth > 0.0f && depth < thickness) {
+        hit0 = 1;
+        break;
+      }
+      search0 = search1;
+    }
+    if (!hit0) {
+      // The seed's state after its last (k = n) sample, which may have been
+      // skipped as off-screen: its uv is what the seed reports.
+      const float kf = static_cast<float>(n);
+      frag[0] = start_frag[0] + kf * inc_x;
+      frag[1] = start_frag[1] + kf * inc_y;
+      uv[0] = frag[0] / tex_w;
+      uv[1] = frag[1] / tex_h;
+      search1 = search_of(frag[0], frag[1]);
+      search0 = search1;
+    }
+  }
+
+  search1 = search0 + ((search1 - search0) / 2.0f);
+
+  // Second pass: the chapter's bisection.
+  const int steps = s.opt.steps * hit0;
+  float last_probe = -1.0f;
+  for (int i = 0; i < steps; ++i) {
+    // SKIP: once search0 == search1 and that point was just probed, every
+    // further step probes it again with the same outcome.
+    if (search0 == search1 && search1 == last_probe) break;
+    last_probe = search1;
+    frag[0] = mixf(start_frag[0], end_frag[0], search1);
+    frag[1] = mixf(start_frag[1], end_frag[1], search1);
+    uv[0] = frag[0] / tex_w;
+    uv[1] = frag[1] / tex_h;
+    const bool seen = fetch_position(pos, uv[0], uv[1], position_to);
+    depth = ray_depth(search1) - view_distance({position_to[0], position_to[1], position_to[2]});
+    if (seen && depth > 0.0f && depth < thickness) {
+      hit1 = 1;
+      search1 = search0 + ((search1 - search0) / 2.0f);
+    } else {
+      const float temp = search1;
+      search1 = search1 + ((search1 - search0) / 2.0f);
+      search0 = temp;
+    }
+  }
+
+  float visibility = 0.0f;
+  // FIX 4: without a hit the product is zero; evaluating its other terms
+  // could divide by a zero thickness or max_distance.
+  if (hit1) {
+    const V3 to = {position_to[0], position_to[1], position_to[2]};
+    visibility = static_cast<float>(hit1) * position_to[3] *
+                 (1.0f - std::fmax(dot(unit_from * -1.0f, pivot), 0.0f)) *
+                 (1.0f - clamp01(depth / thickness)) *
+                 (1.0f - clamp01(length(to - from) / max_distance)) *
+                 ((uv[0] < 0.0f || uv[0] > 1.0f) ? 0.0f : 1.0f) *
+                 ((uv[1] < 0.0f || uv[1] > 1.0f) ? 0.0f : 1.0f);
+    visibility = clamp01(visibility);
+    if (!finite(visibility)) visibility = 0.0f;
+  }
+  if (!finite(uv[0]) || !finite(uv[1])) return;
+  out[0] = uv[0];
+  out[1] = uv[1];
+  out[2] = visibility;
+  out[3] = visibility;
+}
+
+void march_linear(const MarchSetup& s, int x, int y, float out[4]) {
+  out[0] = out[1] = out[2] = out[3] = 0.0f;
+  V3 from, unit_from, normal;
+  if (!read_origin(s, x, y, from, unit_from, normal)) return;
+  const int steps = s.opt.steps;
+  if (steps <= 0) return;
+
+  const V3 reflection = normalize(reflect(unit_from, normal));
+  if (!finite(reflection)) return;
+  const float thickness = s.opt.thickness;
+  float max_distance = s.opt.max_distance;
+  float step_size = max_distance / static_cast<float>(steps);
+  float count = 1.0f;
+  float position_to[4];
+
+  for (int i = 0; i < steps; ++i) {
+    const float distance = count * step_size;
+    if (distance > max_distance) break;
+    const V3 sample = from + reflection * distance;
+    float c[4];
+    clip_of(s.proj, sample, c);
+    // A sample behind the eye (w <= 0) is outside the frustum too: without
+    // this test its divided coordinates would flip sign and look inside.
+    if (!(c[3] > 0.0f)) break;
+    const float ox = c[0] / c[3] * 0.5f + 0.5f;
+    const float oy = c[1] / c[3] * 0.5f + 0.5f;
+    const float oz = c[2] / c[3];
+    if (!(ox >= 0.0f && oy >= 0.0f && oz >= -1.0f && ox <= 1.0f && oy <= 1.0f && oz <= 1.0f)) break;
+
+    const bool seen = fetch_position(*s.position, ox, oy, position_to);
+    const float sample_vd = view_distance(sample);
+    const float scene_vd = view_distance({position_to[0], position_to[1], position_to[2]});
+    if (seen && sample_vd >= scene_vd && sample_vd <= scene_vd + thickness) {
+      const float visibility = clamp01(1.0f - std::fmax(dot(reflection, unit_from * -1.0f), 0.0f));
+      // The book writes (u, v, visibility, 1); Glint's buffer contract is
+      // (u, v, visibility, visibility) for every march.
+      out[0] = ox;
+      out[1] = oy;
+      out[2] = visibility;
+      out[3] = visibility;
+      // Step back to the last miss and approach with smaller steps, exactly
+      // as the book does (the restart distance is count * new step size).
+      count -= 1.0f;
+      max_distance = distance;
+      const float previous_distance = count * step_size;
+      const float steps_left = std::fmax(static_cast<float>(steps - i), 1.0f);
+      step_size = (max_distance - previous_distance) / steps_left;
+    } else {
+      count += 1.0f;
+    }
+  }
+}
+
+}  // namespace glint::cpu

@@ -1,0 +1,34 @@
+// The per-pixel ray marches of the CPU backend. Written in float32 with the
+// same operation order as shaders/trace_*.frag so that CPU and GL agree.
+#pragma once
+#include "glint/image.h"
+#include "glint/options.h"
+#include "glint/projection.h"
+
+namespace glint::cpu {
+
+// Everything a march needs that does not change from pixel to pixel.
+struct MarchSetup {
+  const Image* position = nullptr;
+  const Image* normal = nullptr;
+  float proj[16];   // row-major float copy of the projection
+  double projd[16];  // the same in double, for near-plane clipping
+  ProjectionKind kind = ProjectionKind::Perspective;
+  TraceOptions opt;
+};
+
+MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
+                      const TraceOptions& opt);
+
+// Writes (u, v, visibility, visibility) for pixel (x, y); (0, 0, 0, 0) where
+// nothing was seen, the normal is zero, or the ray cannot be projected.
+void march_seed(const MarchSetup& s, int x, int y, float out[4]);
+void march_linear(const MarchSetup& s, int x, int y, float out[4]);
+
+// True when a position texel counts as "seen": w > 0 and every channel finite.
+inline bool texel_seen(const float* p) {
+  return p[3] > 0.0f && p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f &&
+         p[3] - p[3] == 0.0f;
+}
+
+}  // namespace glint::cpu

@@ -1,0 +1,45 @@
+// Row-parallel loops for the CPU backend. Rays cost very different amounts
+// (a sky pixel is free, a grazing floor ray crosses the screen), so rows are
+// handed out in small chunks from a shared counter rather than split evenly.
+#pragma once
+#include <algorithm>
+#include <atomic>
+#include <thread>
+#include <vector>
+
+namespace glint::cpu {
+
+inline int resolve_threads(int requested) {
+  if (requested > 0) return requested;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw == 0 ? 1 : static_cast<int>(hw);
+}
+
+// Calls body(y) for every y in [begin, end). body must not throw.
+template <class Body>
+void parallel_rows(int begin, int end, int threads, Body&& body) {
+  const int rows = end - begin;
+  if (rows <= 0) return;
+  const int n = std::min(resolve_threads(threads), rows);
+  if (n <= 1) {
+    for (int y = begin; y < end; ++y) body(y);
+    return;
+  }
+  const int chunk = std::max(1, rows / (n * 16));
+  std::atomic<int> next{begin};
+  auto worker = [&]() {
+    for (;;) {
+      const int y0 = next.fetch_add(chunk);
+      if (y0 >= end) return;
+      const int y1 = std::min(end, y0 + chunk);
+      for (int y = y0; y < y1; ++y) body(y);
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(n - 1);
+  for (int t = 0; t < n - 1; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace glint::cpu

@@ -1,0 +1,70 @@
+#include "glint/options.h"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "glint/errors.h"
+
+namespace glint {
+namespace {
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+void require_range(const char* name, double v, double lo, double hi) {
+  if (!std::isfinite(v) || v < lo || v > hi) {
+    throw InvalidArgument(name, "expected a finite number in [" + num(lo) + ", " + num(hi) +
+                                    "], got " + num(v));
+  }
+}
+
+}  // namespace
+
+void validate(const TraceOptions& o) {
+  require_range("max_distance", o.max_distance, 0.0, kMaxDistanceLimit);
+  require_range("resolution", o.resolution, 0.0, 1.0);
+  require_range("thickness", o.thickness, 0.0, 1e30);
+  if (o.steps < 0 || o.steps > kMaxSteps) {
+    throw InvalidArgument("steps", "expected an integer in [0, " + std::to_string(kMaxSteps) +
+                                       "], got " + std::to_string(o.steps));
+  }
+}
+
+void validate(const BlurOptions& o) {
+  if (o.size < 0 || o.size > kMaxBlurSize) {
+    throw InvalidArgument("blur_size", "expected an integer in [0, " +
+                                           std::to_string(kMaxBlurSize) + "], got " +
+                                           std::to_string(o.size));
+  }
+  require_range("blur_separation", o.separation, 1.0, kMaxBlurSeparation);
+}
+
+void validate(const PipelineOptions& o) {
+  validate(o.trace);
+  validate(o.blur);
+  if (o.threads < 0 || o.threads > 1024) {
+    throw InvalidArgument("threads", "expected 0 (all hardware threads) to 1024, got " +
+                                         std::to_string(o.threads));
+  }
+}
+
+March parse_march(const std::string& name) {
+  if (name == "seed") return March::Seed;
+  if (name == "linear") return March::Linear;
+  throw InvalidArgument("march", "expected \"seed\" or \"linear\", got \"" + name + "\"");
+}
+
+Combine parse_combine(const std::string& name) {
+  if (name == "over") return Combine::Over;
+  if (name == "seed") return Combine::Seed;
+  throw InvalidArgument("combine", "expected \"over\" or \"seed\", got \"" + name + "\"");
+}
+
+const char* to_string(March m) { return m == March::Seed ? "seed" : "linear"; }
+const char* to_string(Combine c) { return c == Combine::Over ? "over" : "seed"; }
+
+}  // namespace glint

@@ -1,0 +1,105 @@
+// Blur, reflection and combine against plain formulas written out here.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "analytic_scene.h"
+#include "glint/pipeline.h"
+
+using namespace glint;
+
+namespace {
+Image noise(int w, int h, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  Image img(w, h);
+  for (float& v : img.data) v = u(rng);
+  return img;
+}
+}  // namespace
+
+TEST(BoxBlur, MatchesTheBrute2DBoxWithClampToEdge) {
+  const int w = 23, h = 17, size = 3;
+  Image src = noise(w, h, 7);
+  auto cpu = make_cpu_backend(2);
+  for (float sep : {1.0f, 2.0f}) {
+    BlurOptions o;
+    o.size = size;
+    o.separation = sep;
+    Image out = cpu->box_blur(src, o, nullptr);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 4; ++c) {
+          double acc = 0;
+          for (int j = -size; j <= size; ++j)
+            for (int i = -size; i <= size; ++i) {
+              const int xx = std::min(std::max(x + int(i * sep), 0), w - 1);
+              const int yy = std::min(std::max(y + int(j * sep), 0), h - 1);
+              acc += src.px(xx, yy)[c];
+            }
+          ASSERT_NEAR(out.px(x, y)[c], acc / ((2 * size + 1) * (2 * size + 1)), 1e-5);
+        }
+  }
+}
+
+TEST(BoxBlur, RegionLeavesTheRestUntouched) {
+  Image src = noise(20, 20, 3);
+  auto cpu = make_cpu_backend(1);
+  const int region[4] = {5, 6, 9, 8};
+  Image out = cpu->box_blur(src, BlurOptions{}, region);
+  EXPECT_EQ(out.px(0, 0)[0], src.px(0, 0)[0]);
+  EXPECT_NE(out.px(6, 7)[0], src.px(6, 7)[0]);
+}
+
+TEST(Reflection, MixesByRoughnessAndScalesBySpecularAmount) {
+  Image c(1, 1), b(1, 1), s(1, 1);
+  for (int k = 0; k < 4; ++k) {
+    c.data[k] = 1.0f;
+    b.data[k] = 0.0f;
+  }
+  s.data = {0.3f, 0.6f, 0.9f, 0.25f};  // amount 0.6, roughness 0.75
+  auto cpu = make_cpu_backend(1);
+  Image r = cpu->reflection(c, b, s);
+  EXPECT_NEAR(r.data[0], 0.25f * 0.6f, 1e-6);
+  s.data = {0, 0, 0, 1};
+  EXPECT_EQ(cpu->reflection(c, b, s).data[0], 0.0f);
+}
+
+TEST(Combine, OverAppliesVisibilityOnceSeedTwice) {
+  Image base(1, 1), refl(1, 1);
+  base.data = {0.2f, 0.2f, 0.2f, 1.0f};
+  // A premultiplied reflection: colour 1.0 at alpha 0.5.
+  refl.data = {0.5f, 0.5f, 0.5f, 0.5f};
+  auto cpu = make_cpu_backend(1);
+  EXPECT_NEAR(cpu->combine(base, refl, Combine::Over).data[0], 0.2f * 0.5f + 0.5f, 1e-6);
+  EXPECT_NEAR(cpu->combine(base, refl, Combine::Seed).data[0], 0.2f * 0.5f + 0.25f, 1e-6);
+  EXPECT_EQ(cpu->combine(base, refl, Combine::Over).data[3], 1.0f);
+}
+
+TEST(Pipeline, NoReflectiveSurfaceSkipsEverythingAndReturnsTheBase) {
+  test::Scene s = test::mirror_floor_scene();
+  for (auto& p : s.planes) p.specular = 0.0f;
+  for (auto& sp : s.spheres) sp.specular = 0.0f;
+  auto g = test::render(s, perspective(1.0, 1.5, 0.1, 100), 48, 32);
+  auto cpu = make_cpu_backend(2);
+  PipelineResult r = run_pipeline(*cpu, {g.position, g.normal, g.specular, g.color, g.projection}, {});
+  EXPECT_EQ(r.reflective_pixels, 0u);
+  EXPECT_EQ(r.layers.at("combined").data, g.color.data);
+  for (const auto& t : r.timings)
+    if (t.stage != "survey") EXPECT_TRUE(t.skipped) << t.stage;
+}
+
+TEST(Pipeline, MirrorOnlySceneSkipsTheBlur) {
+  test::Scene s = test::mirror_floor_scene();
+  s.spheres[1].specular = 0.0f;  // the only rough reflector
+  auto g = test::render(s, perspective(1.0, 1.5, 0.1, 100), 48, 32);
+  auto cpu = make_cpu_backend(2);
+  PipelineResult r = run_pipeline(*cpu, {g.position, g.normal, g.specular, g.color, g.projection}, {});
+  EXPECT_GT(r.reflective_pixels, 0u);
+  EXPECT_EQ(r.rough_pixels, 0u);
+  bool blur_skipped = false;
+  for (const auto& t : r.timings)
+    if (t.stage == "box_blur") blur_skipped = t.skipped;
+  EXPECT_TRUE(blur_skipped);
+}
