@@ -14,6 +14,7 @@ using namespace pybind11::literals;
 
 namespace glint::py {
 
+void bind_exr(pyb::module_& m);
 
 namespace {
 
@@ -199,5 +200,7 @@ PYBIND11_MODULE(glint_core, m) {
       "backend_name",
       [](const std::string& backend) { return get_backend(backend)->name(); }, "backend"_a = "auto",
       "The backend a name resolves to ('auto' -> 'gl' or 'cpu'); raises BackendUnavailable.");
+
+  bind_exr(m);
 
 }

@@ -1,0 +1,379 @@
+// Multilayer EXR reading and writing (see glint/exr.h for the rules).
+//
+// Pixels move through small strips of scanlines rather than whole-image
+// frame buffers: the Image rows run bottom-up and EXR scanlines top-down, and
+// OpenEXR's strides are unsigned, so a flipped view cannot be expressed as a
+// slice. A strip costs one copy per row and keeps the extra memory to a few
+// megabytes however large the image is.
+#include "glint/exr.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputPart.h>
+#include <OpenEXR/ImfMatrixAttribute.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <set>
+#include <thread>
+
+#include "glint/errors.h"
+#include "glint/options.h"
+
+namespace glint {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Scratch budget for one strip, in floats: 4M floats = 16 MiB.
+constexpr int64_t kStripFloats = int64_t{1} << 22;
+constexpr int kMaxStripRows = 64;
+constexpr size_t kMaxLayerNameLength = 250;  // EXR channel names stop at 255 bytes
+
+std::string in_quotes(const std::string& s) { return "\"" + s + "\""; }
+
+[[noreturn]] void bad_file(const std::string& path, const std::string& problem) {
+  throw InvalidArgument("path", in_quotes(path) + ": " + problem);
+}
+
+// R/G/B/A and the vector spellings of the same slots; -1: not an RGBA slot.
+int component_of(const std::string& suffix) {
+  if (suffix.size() != 1) return -1;
+  switch (suffix[0]) {
+    case 'R': case 'r': case 'X': case 'x': case 'U': case 'u': return 0;
+    case 'G': case 'g': case 'Y': case 'y': case 'V': case 'v': return 1;
+    case 'B': case 'b': case 'Z': case 'z': return 2;
+    case 'A': case 'a': case 'W': case 'w': return 3;
+    default: return -1;
+  }
+}
+
+const char* compression_name(Imf::Compression c) {
+  switch (c) {
+    case Imf::NO_COMPRESSION: return "none";
+    case Imf::RLE_COMPRESSION: return "rle";
+    case Imf::ZIPS_COMPRESSION: return "zips";
+    case Imf::ZIP_COMPRESSION: return "zip";
+    case Imf::PIZ_COMPRESSION: return "piz";
+    case Imf::PXR24_COMPRESSION: return "pxr24";
+    case Imf::B44_COMPRESSION: return "b44";
+    case Imf::B44A_COMPRESSION: return "b44a";
+    case Imf::DWAA_COMPRESSION: return "dwaa";
+    case Imf::DWAB_COMPRESSION: return "dwab";
+    default: return "unknown";
+  }
+}
+
+Imf::Compression parse_compression(const std::string& name) {
+  if (name == "none") return Imf::NO_COMPRESSION;
+  if (name == "rle") return Imf::RLE_COMPRESSION;
+  if (name == "zips") return Imf::ZIPS_COMPRESSION;
+  if (name == "zip") return Imf::ZIP_COMPRESSION;
+  if (name == "piz") return Imf::PIZ_COMPRESSION;
+  throw InvalidArgument("compression", "expected a lossless method, \"none\", \"rle\", \"zips\", "
+                                       "\"zip\" or \"piz\", got " + in_quotes(name));
+}
+
+int strip_rows(int64_t width, int64_t floats_per_pixel) {
+  const int64_t per_row = std::max<int64_t>(1, width * floats_per_pixel);
+  return static_cast<int>(std::clamp<int64_t>(kStripFloats / per_row, 1, kMaxStripRows));
+}
+
+// Where a layer's components come from in one part: a channel index into the
+// part's strip scratch, or -1 when the file lacks that component.
+struct LayerSource {
+  std::string name;
+  int part = -1;
+  std::array<int, 4> channel{-1, -1, -1, -1};
+  std::array<std::string, 4> channel_name;
+  int count = 0;
+};
+
+struct PartPlan {
+  std::vector<std::string> channels;  // names read from this part, scratch order
+  std::vector<LayerSource*> layers;
+};
+
+std::string size_text(const Imath::Box2i& w) {
+  return std::to_string(int64_t{w.max.x} - w.min.x + 1) + "x" +
+         std::to_string(int64_t{w.max.y} - w.min.y + 1);
+}
+
+void read_projection(const Imf::Header& h, const std::string& path, ExrFile& out) {
+  auto it = h.find(kExrProjectionAttribute);
+  if (it == h.end()) return;
+  const Imf::Attribute& a = it.attribute();
+  Mat4 m;
+  if (auto* d = dynamic_cast<const Imf::M44dAttribute*>(&a)) {
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) m(r, c) = d->value()[r][c];
+  } else if (auto* f = dynamic_cast<const Imf::M44fAttribute*>(&a)) {
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) m(r, c) = f->value()[r][c];
+  } else {
+    bad_file(path, std::string("header attribute ") + kExrProjectionAttribute + " has type " +
+                       a.typeName() + ", expected m44d (a 4x4 double matrix)");
+  }
+  out.projection = m;
+}
+
+ExrFile read_exr_file(const std::string& path) {
+  Imf::MultiPartInputFile file(path.c_str());
+  const int parts = file.parts();
+  if (parts < 1) bad_file(path, "holds no image parts");
+
+  const Imath::Box2i display = file.header(0).displayWindow();
+  const int64_t W = int64_t{display.max.x} - display.min.x + 1;
+  const int64_t H = int64_t{display.max.y} - display.min.y + 1;
+  if (W < 1 || H < 1 || W > kMaxImageSide || H > kMaxImageSide)
+    bad_file(path, "display window is " + size_text(display) + ", expected 1 to " +
+                       std::to_string(kMaxImageSide) + " pixels a side");
+
+  ExrFile out;
+  out.compression = compression_name(file.header(0).compression());
+  std::map<std::string, LayerSource> sources;
+  std::vector<PartPlan> plans(static_cast<size_t>(parts));
+  for (int p = 0; p < parts; ++p) {
+    const Imf::Header& h = file.header(p);
+    if (h.hasType() && Imf::isDeepData(h.type()))
+      bad_file(path, "part " + std::to_string(p) + " holds deep data, which is not supported");
+    if (h.displayWindow() != display)
+      bad_file(path, "part " + std::to_string(p) + " is " + size_text(h.displayWindow()) +
+                         " but part 0 is " + size_text(display) +
+                         "; all layers must have the same size");
+    const Imath::Box2i dw = h.dataWindow();
+    const int64_t dw_w = int64_t{dw.max.x} - dw.min.x + 1, dw_h = int64_t{dw.max.y} - dw.min.y + 1;
+    if (dw_w < 1 || dw_h < 1 || dw_w > kMaxImageSide || dw_h > kMaxImageSide)
+      bad_file(path, "data window of part " + std::to_string(p) + " is " + size_text(dw) +
+                         ", expected 1 to " + std::to_string(kMaxImageSide) + " pixels a side");
+    if (!out.projection) read_projection(h, path, out);
+    if (out.options.empty()) {
+      if (auto* s = h.findTypedAttribute<Imf::StringAttribute>(kExrOptionsAttribute))
+        out.options = s->value();
+    }
+
+    for (auto it = h.channels().begin(); it != h.channels().end(); ++it) {
+      const std::string name = it.name();
+      const Imf::Channel& ch = it.channel();
+      if (ch.type != Imf::HALF && ch.type != Imf::FLOAT)
+        bad_file(path, "channel " + in_quotes(name) + " has type UINT, expected HALF or FLOAT");
+      if (ch.xSampling != 1 || ch.ySampling != 1)
+        bad_file(path, "channel " + in_quotes(name) + " is subsampled (" +
+                           std::to_string(ch.xSampling) + "x" + std::to_string(ch.ySampling) +
+                           "), which is not supported");
+      const size_t dot = name.rfind('.');
+      const std::string layer = dot == std::string::npos ? std::string() : name.substr(0, dot);
+      const int comp = component_of(dot == std::string::npos ? name : name.substr(dot + 1));
+      if (comp < 0) {
+        out.skipped_channels.push_back(name);
+        continue;
+      }
+      LayerSource& src = sources[layer];
+      if (src.part < 0) {
+        src.name = layer;
+        src.part = p;
+        plans[p].layers.push_back(&src);
+      } else if (src.part != p) {
+        bad_file(path, "layer " + in_quotes(layer) + " is split across parts " +
+                           std::to_string(src.part) + " and " + std::to_string(p));
+      }
+      if (src.channel[comp] >= 0)
+        bad_file(path, "channels " + in_quotes(src.channel_name[comp]) + " and " + in_quotes(name) +
+                           " both give component " + std::string(1, "RGBA"[comp]) + " of layer " + in_quotes(layer));
+      src.channel[comp] = static_cast<int>(plans[p].channels.size());
+      src.channel_name[comp] = name;
+      ++src.count;
+      plans[p].channels.push_back(name);
+    }
+  }
+  if (sources.empty())
+    bad_file(path, "has no R/G/B/A or X/Y/Z/W channels (found " +
+                       std::to_string(out.skipped_channels.size()) + " other channels)");
+
+  // Zero outside the data window ("nothing there"), defaults inside it.
+  for (auto& [name, src] : sources) out.layers[name] = Image(static_cast<int>(W), static_cast<int>(H));
+
+  for (int p = 0; p < parts; ++p) {
+    const PartPlan& plan = plans[p];
+    if (plan.channels.empty()) continue;
+    Imf::InputPart part(file, p);
+    const Imath::Box2i dw = file.header(p).dataWindow();
+    const int64_t dw_w = int64_t{dw.max.x} - dw.min.x + 1;
+    const int64_t nch = static_cast<int64_t>(plan.channels.size());
+    const int rows = strip_rows(dw_w, nch);
+    const size_t plane = static_cast<size_t>(rows) * static_cast<size_t>(dw_w);
+    std::vector<float> scratch(plane * static_cast<size_t>(nch));
+
+    for (int64_t y0 = dw.min.y; y0 <= dw.max.y; y0 += rows) {
+      const int y1 = static_cast<int>(std::min<int64_t>(y0 + rows - 1, dw.max.y));
+      const Imath::Box2i strip(Imath::V2i(dw.min.x, static_cast<int>(y0)), Imath::V2i(dw.max.x, y1));
+      Imf::FrameBuffer fb;
+      for (int64_t c = 0; c < nch; ++c) {
+        fb.insert(plan.channels[c],
+                  Imf::Slice::Make(Imf::FLOAT, scratch.data() + c * plane, strip, sizeof(float),
+                                   sizeof(float) * static_cast<size_t>(dw_w)));
+      }
+      part.setFrameBuffer(fb);
+      part.readPixels(static_cast<int>(y0), y1);
+
+      for (int64_t y = y0; y <= y1; ++y) {
+        const int64_t row = (H - 1) - (y - display.min.y);  // EXR top-down -> Image bottom-up
+        if (row < 0 || row >= H) continue;
+        const int64_t x_lo = std::max<int64_t>(dw.min.x, display.min.x);
+        const int64_t x_hi = std::min<int64_t>(dw.max.x, display.max.x);
+        const size_t line = static_cast<size_t>(y - y0) * static_cast<size_t>(dw_w);
+        for (LayerSource* src : plan.layers) {
+          Image& img = out.layers[src->name];
+          // A lone colour or vector channel (a depth or mist pass) reads as grey.
+          const int lone = (src->count == 1 && src->channel[3] < 0)
+                               ? std::max({src->channel[0], src->channel[1], src->channel[2]})
+                               : -1;
+          for (int64_t x = x_lo; x <= x_hi; ++x) {
+            float* px = img.px(static_cast<int>(x - display.min.x), static_cast<int>(row));
+            const size_t at = line + static_cast<size_t>(x - dw.min.x);
+            if (lone >= 0) {
+              const float v = scratch[static_cast<size_t>(lone) * plane + at];
+              px[0] = px[1] = px[2] = v;
+              px[3] = 1.0f;
+              continue;
+            }
+            for (int k = 0; k < 4; ++k) {
+              const int c = src->channel[k];
+              px[k] = c >= 0 ? scratch[static_cast<size_t>(c) * plane + at] : (k == 3 ? 1.0f : 0.0f);
+            }
+          }
+        }
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ExrFile read_exr(const std::string& path) {
+  if (path.empty()) throw InvalidArgument("path", "expected the name of an EXR file, got \"\"");
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) bad_file(path, "no such file");
+  if (fs::is_directory(st)) bad_file(path, "is a directory, expected an EXR file");
+  {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) bad_file(path, std::string("cannot be opened: ") + std::strerror(errno));
+    unsigned char magic[4] = {0, 0, 0, 0};
+    const size_t n = std::fread(magic, 1, 4, f);
+    std::fclose(f);
+    // Every EXR starts with 76 2f 31 01; checking it first turns "some
+    // other file" into a clear message instead of a library parse error.
+    if (n != 4 || magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 || magic[3] != 0x01)
+      bad_file(path, "is not an OpenEXR file (bad magic number)");
+  }
+  try {
+    return read_exr_file(path);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error("cannot read EXR " + in_quotes(path) + ": " + e.what());
+  }
+}
+
+void write_exr(const std::string& path, const std::map<std::string, Image>& layers,
+               const ExrWriteOptions& options) {
+  if (path.empty()) throw InvalidArgument("path", "expected a file name to write, got \"\"");
+  if (layers.empty()) throw InvalidArgument("layers", "expected at least one layer, got none");
+  const Image& first = layers.begin()->second;
+  for (const auto& [name, img] : layers) {
+    const std::string arg = "layers[" + in_quotes(name) + "]";
+    if (img.width < 1 || img.height < 1 || img.width > kMaxImageSide || img.height > kMaxImageSide)
+      throw InvalidArgument(arg, "expected 1 to " + std::to_string(kMaxImageSide) +
+                                     " pixels a side, got " + std::to_string(img.width) + "x" +
+                                     std::to_string(img.height));
+    if (img.data.size() != img.pixel_count() * 4)
+      throw InvalidArgument(arg, "expected width * height * 4 floats, got " +
+                                     std::to_string(img.data.size()));
+    if (img.width != first.width || img.height != first.height)
+      throw InvalidArgument(arg, "expected the size of every other layer, " +
+                                     std::to_string(first.width) + "x" + std::to_string(first.height) +
+                                     " (layer " + in_quotes(layers.begin()->first) + "), got " +
+                                     std::to_string(img.width) + "x" + std::to_string(img.height));
+    if (name.size() > kMaxLayerNameLength)
+      throw InvalidArgument(arg, "expected a layer name of at most " +
+                                     std::to_string(kMaxLayerNameLength) + " bytes");
+  }
+  if (options.projection) validate_projection(*options.projection);
+  const Imf::Compression compression = parse_compression(options.compression);
+
+  const int W = first.width, H = first.height;
+  bool created = false;
+  try {
+    Imf::Header header(W, H);
+    header.compression() = compression;
+    if (options.projection) {
+      Imath::M44d m;
+      for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) m[r][c] = (*options.projection)(r, c);
+      header.insert(kExrProjectionAttribute, Imf::M44dAttribute(m));
+    }
+    if (!options.options.empty())
+      header.insert(kExrOptionsAttribute, Imf::StringAttribute(options.options));
+    static const char* const kSuffix[4] = {"R", "G", "B", "A"};
+    for (const auto& [name, img] : layers)
+      for (const char* s : kSuffix)
+        header.channels().insert(name.empty() ? std::string(s) : name + "." + s,
+                                 Imf::Channel(Imf::FLOAT));
+
+    Imf::OutputFile file(path.c_str(), header);
+    created = true;
+    const int rows = strip_rows(W, 4 * static_cast<int64_t>(layers.size()));
+    const size_t row_floats = static_cast<size_t>(W) * 4;
+    const size_t plane = row_floats * static_cast<size_t>(rows);
+    std::vector<float> scratch(plane * layers.size());
+    for (int y0 = 0; y0 < H; y0 += rows) {
+      const int y1 = std::min(y0 + rows - 1, H - 1);
+      const Imath::Box2i strip(Imath::V2i(0, y0), Imath::V2i(W - 1, y1));
+      Imf::FrameBuffer fb;
+      size_t k = 0;
+      for (const auto& [name, img] : layers) {
+        float* base = scratch.data() + k++ * plane;
+        for (int y = y0; y <= y1; ++y)  // EXR scanline y is Image row H - 1 - y
+          std::memcpy(base + static_cast<size_t>(y - y0) * row_floats, img.px(0, H - 1 - y),
+                      row_floats * sizeof(float));
+        for (int c = 0; c < 4; ++c)
+          fb.insert(name.empty() ? std::string(kSuffix[c]) : name + "." + kSuffix[c],
+                    Imf::Slice::Make(Imf::FLOAT, base + c, strip, 4 * sizeof(float),
+                                     row_floats * sizeof(float)));
+      }
+      file.setFrameBuffer(fb);
+      file.writePixels(y1 - y0 + 1);
+    }
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    // A half-written file would read back as a corrupt one later; better none.
+    std::error_code ec;
+    if (created && fs::is_regular_file(path, ec)) fs::remove(path, ec);
+    throw Error("cannot write EXR " + in_quotes(path) + ": " + e.what());
+  }
+}
+
+void set_exr_threads(int threads) {
+  if (threads < 0 || threads > 1024)
+    throw InvalidArgument("threads", "expected 0 (all hardware threads) to 1024, got " +
+                                         std::to_string(threads));
+  if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  Imf::setGlobalThreadCount(threads);
+}
+
+}  // namespace glint

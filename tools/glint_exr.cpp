@@ -1,0 +1,359 @@
+// glint-exr: the screen-space reflection pipeline on a multilayer EXR, for
+// batch jobs and for checking the core outside Blender.
+//
+// Exit status: 0 done, 1 the work failed (unreadable input, missing layer or
+// projection, pipeline or write error), 2 the command line is wrong.
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "glint/backend.h"
+#include "glint/errors.h"
+#include "glint/exr.h"
+#include "glint/pipeline.h"
+#include "glint/png.h"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+const char* const kUsage = R"(usage: glint-exr [options] INPUT.exr [OUTPUT.exr]
+
+Runs Glint's screen-space reflections on the position, normal, specular and
+colour layers of a multilayer EXR and writes every input layer plus the
+pipeline's layers (uv, reflection_color, reflection_blur, reflection,
+combined) to OUTPUT.exr. Layers are read as glint_core.read_exr does: layer
+"position" is channels position.R/G/B/A (or .X/Y/Z/W), Blender's
+"ViewLayer.Pass.R" is layer "ViewLayer.Pass". Row 0 is the bottom row.
+
+Input layers:
+  --position-layer NAME   view-space position, w = 1 where seen  [position]
+  --normal-layer NAME     view-space normal                     [normal]
+  --specular-layer NAME   rgb specular colour, a = shininess     [specular]
+  --color-layer NAME      base colour (linear)                   [color]
+
+Projection (default: the input's glintProjection header attribute):
+  --projection "P00 P01 ... P33"      16 numbers, rows as printed:
+                                      clip = P * (x, y, z, 1)
+  --perspective FOV_Y_DEG,NEAR,FAR    aspect = image width / height
+  --orthographic HALF_HEIGHT,NEAR,FAR half width = half height * aspect
+
+Pipeline:
+  --max-distance F        longest reflected ray, view units      [15]
+  --resolution F          coarse-pass share of pixels, 0..1      [0.3]
+  --steps N               bisection (seed) / march (linear) steps [10]
+  --thickness F           hit depth tolerance, view units        [0.5]
+  --march seed|linear                                            [seed]
+  --blur-size N           box half-width in taps, 0 = no blur    [8]
+  --blur-separation F     pixels between taps, >= 1              [1]
+  --combine over|seed                                            [over]
+  --backend cpu|gl|auto                                          [cpu]
+  --threads N             CPU threads, 0 = all                   [0]
+
+Output:
+  --png FILE              8-bit sRGB PNG of the combined layer
+  --compression METHOD    zip|zips|piz|rle|none                  [zip]
+  -h, --help              print this and exit
+
+OUTPUT.exr may be left out when --png is given. Per-stage timings are printed
+to stdout. Example:
+  glint-exr --perspective 50,0.1,100 --png out.png gbuffer.exr out.exr
+)";
+
+// A bad command line: message for stderr, exit status 2.
+struct UsageError {
+  std::string message;
+};
+
+struct Args {
+  std::string input, output, png;
+  std::string position_layer = "position", normal_layer = "normal", specular_layer = "specular",
+              color_layer = "color";
+  std::optional<glint::Mat4> projection;  // from --projection
+  std::optional<std::vector<double>> perspective, orthographic;
+  glint::PipelineOptions opt;
+  std::string backend = "cpu";
+  std::string compression = "zip";
+};
+
+double parse_double(const std::string& flag, const std::string& text) {
+  const char* s = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s, &end);
+  if (end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+    throw UsageError{flag + ": expected a finite number, got \"" + text + "\""};
+  return v;
+}
+
+int parse_int(const std::string& flag, const std::string& text) {
+  const char* s = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(s, &end, 10);
+  if (end == s || *end != '\0' || errno == ERANGE || v < -2147483647L || v > 2147483647L)
+    throw UsageError{flag + ": expected an integer, got \"" + text + "\""};
+  return static_cast<int>(v);
+}
+
+// Numbers separated by commas and/or white space.
+std::vector<double> parse_list(const std::string& flag, const std::string& text, size_t count) {
+  std::string spaced = text;
+  for (char& c : spaced)
+    if (c == ',') c = ' ';
+  std::istringstream in(spaced);
+  std::vector<double> out;
+  std::string token;
+  while (in >> token) out.push_back(parse_double(flag, token));
+  if (out.size() != count)
+    throw UsageError{flag + ": expected " + std::to_string(count) + " numbers, got " +
+                     std::to_string(out.size()) + " in \"" + text + "\""};
+  return out;
+}
+
+Args parse_args(int argc, char** argv, bool& help) {
+  Args a;
+  std::vector<std::string> positional;
+  bool options_done = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (options_done || arg.size() < 2 || arg[0] != '-') {
+      positional.push_back(arg);
+      continue;
+    }
+    if (arg == "--") {
+      options_done = true;
+      continue;
+    }
+    if (arg == "-h" || arg == "--help") {
+      help = true;
+      return a;
+    }
+    std::string flag = arg, value;
+    bool has_value = false;
+    if (const size_t eq = arg.find('='); arg.rfind("--", 0) == 0 && eq != std::string::npos) {
+      flag = arg.substr(0, eq);
+      value = arg.substr(eq + 1);
+      has_value = true;
+    }
+    auto next = [&]() -> std::string {
+      if (has_value) return value;
+      if (i + 1 >= argc) throw UsageError{flag + ": expected a value"};
+      return argv[++i];
+    };
+    if (flag == "--position-layer") a.position_layer = next();
+    else if (flag == "--normal-layer") a.normal_layer = next();
+    else if (flag == "--specular-layer") a.specular_layer = next();
+    else if (flag == "--color-layer") a.color_layer = next();
+    else if (flag == "--projection") {
+      const auto v = parse_list(flag, next(), 16);
+      glint::Mat4 m;
+      for (int k = 0; k < 16; ++k) m.m[k] = v[k];
+      a.projection = m;
+    } else if (flag == "--perspective") a.perspective = parse_list(flag, next(), 3);
+    else if (flag == "--orthographic") a.orthographic = parse_list(flag, next(), 3);
+    else if (flag == "--max-distance") a.opt.trace.max_distance = static_cast<float>(parse_double(flag, next()));
+    else if (flag == "--resolution") a.opt.trace.resolution = static_cast<float>(parse_double(flag, next()));
+    else if (flag == "--steps") a.opt.trace.steps = parse_int(flag, next());
+    else if (flag == "--thickness") a.opt.trace.thickness = static_cast<float>(parse_double(flag, next()));
+    else if (flag == "--march") {
+      const std::string v = next();
+      if (v != "seed" && v != "linear") throw UsageError{flag + ": expected seed or linear, got \"" + v + "\""};
+      a.opt.trace.march = glint::parse_march(v);
+    } else if (flag == "--blur-size") a.opt.blur.size = parse_int(flag, next());
+    else if (flag == "--blur-separation") a.opt.blur.separation = static_cast<float>(parse_double(flag, next()));
+    else if (flag == "--combine") {
+      const std::string v = next();
+      if (v != "over" && v != "seed") throw UsageError{flag + ": expected over or seed, got \"" + v + "\""};
+      a.opt.combine = glint::parse_combine(v);
+    } else if (flag == "--backend") {
+      a.backend = next();
+      if (a.backend != "cpu" && a.backend != "gl" && a.backend != "auto")
+        throw UsageError{flag + ": expected cpu, gl or auto, got \"" + a.backend + "\""};
+    } else if (flag == "--threads") a.opt.threads = parse_int(flag, next());
+    else if (flag == "--png") a.png = next();
+    else if (flag == "--compression") a.compression = next();
+    else throw UsageError{"unknown option \"" + flag + "\" (see --help)"};
+  }
+
+  if (positional.empty()) throw UsageError{"missing INPUT.exr (see --help)"};
+  if (positional.size() > 2)
+    throw UsageError{"expected INPUT.exr [OUTPUT.exr], got " + std::to_string(positional.size()) +
+                     " file names"};
+  a.input = positional[0];
+  if (positional.size() == 2) a.output = positional[1];
+  if (a.output.empty() && a.png.empty())
+    throw UsageError{"nothing to write: give OUTPUT.exr and/or --png FILE"};
+  if (!a.output.empty() && a.output == a.input)
+    throw UsageError{"OUTPUT.exr is the input file; refusing to overwrite it"};
+  const int sources = (a.projection ? 1 : 0) + (a.perspective ? 1 : 0) + (a.orthographic ? 1 : 0);
+  if (sources > 1)
+    throw UsageError{"--projection, --perspective and --orthographic exclude each other"};
+  if (a.compression != "zip" && a.compression != "zips" && a.compression != "piz" &&
+      a.compression != "rle" && a.compression != "none")
+    throw UsageError{"--compression: expected zip, zips, piz, rle or none, got \"" + a.compression + "\""};
+
+  // Range checks by the core, reported under the flag's name.
+  try {
+    glint::validate(a.opt);
+    if (a.projection) glint::validate_projection(*a.projection);
+  } catch (const glint::InvalidArgument& e) {
+    std::string flag = "--" + e.argument();
+    for (char& c : flag)
+      if (c == '_') c = '-';
+    std::string msg = e.what();
+    msg = msg.substr(std::min(msg.size(), e.argument().size() + 2));
+    throw UsageError{flag + ": " + msg};
+  }
+  if (a.perspective) {
+    const auto& p = *a.perspective;
+    if (!(p[0] > 0.0 && p[0] < 180.0))
+      throw UsageError{"--perspective: expected a vertical field of view in (0, 180) degrees"};
+    if (!(p[1] > 0.0 && p[2] > p[1]))
+      throw UsageError{"--perspective: expected 0 < NEAR < FAR"};
+  }
+  if (a.orthographic) {
+    const auto& o = *a.orthographic;
+    if (!(o[0] > 0.0)) throw UsageError{"--orthographic: expected HALF_HEIGHT > 0"};
+    if (!(o[2] > o[1])) throw UsageError{"--orthographic: expected NEAR < FAR"};
+  }
+  return a;
+}
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+std::string number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+const glint::Image& layer(const glint::ExrFile& f, const std::string& path, const std::string& name,
+                          const char* flag) {
+  auto it = f.layers.find(name);
+  if (it != f.layers.end()) return it->second;
+  std::string have;
+  for (const auto& [n, img] : f.layers) have += (have.empty() ? "\"" : ", \"") + n + "\"";
+  throw glint::Error("\"" + path + "\" has no layer \"" + name + "\" (it has " + have +
+                     "); choose one with " + flag);
+}
+
+int run(const Args& a) {
+  glint::set_exr_threads(a.opt.threads);
+  auto t0 = Clock::now();
+  glint::ExrFile in = glint::read_exr(a.input);
+  const double read_ms = ms_since(t0);
+  for (const auto& ch : in.skipped_channels)
+    std::fprintf(stderr, "glint-exr: note: channel \"%s\" is not an R/G/B/A or X/Y/Z/W channel; "
+                 "it is not read or copied\n", ch.c_str());
+
+  glint::PipelineInputs pin;
+  pin.position = layer(in, a.input, a.position_layer, "--position-layer");
+  pin.normal = layer(in, a.input, a.normal_layer, "--normal-layer");
+  pin.specular = layer(in, a.input, a.specular_layer, "--specular-layer");
+  pin.color = layer(in, a.input, a.color_layer, "--color-layer");
+  const int w = pin.position.width, h = pin.position.height;
+  const double aspect = static_cast<double>(w) / h;
+
+  if (a.projection) {
+    pin.projection = *a.projection;
+  } else if (a.perspective) {
+    const auto& p = *a.perspective;
+    pin.projection = glint::perspective(p[0] * kPi / 180.0, aspect, p[1], p[2]);
+  } else if (a.orthographic) {
+    const auto& o = *a.orthographic;
+    pin.projection = glint::orthographic(o[0] * aspect, o[0], o[1], o[2]);
+  } else if (in.projection) {
+    pin.projection = *in.projection;
+  } else {
+    throw glint::Error("\"" + a.input + "\" has no " + glint::kExrProjectionAttribute +
+                       " header attribute; give --projection, --perspective or --orthographic");
+  }
+
+  auto backend = glint::get_backend(a.backend, a.opt.threads);
+  t0 = Clock::now();
+  glint::PipelineResult res = glint::run_pipeline(*backend, pin, a.opt);
+  const double pipeline_ms = ms_since(t0);
+
+  std::printf("glint-exr: %s, %dx%d, backend %s, %zu reflective pixels (%zu rough)\n",
+              a.input.c_str(), w, h, backend->name().c_str(), res.reflective_pixels,
+              res.rough_pixels);
+  std::printf("  %-18s %10.3f ms\n", "read", read_ms);
+  for (const auto& t : res.timings)
+    std::printf("  %-18s %10.3f ms%s\n", t.stage.c_str(), t.milliseconds,
+                t.skipped ? "  (skipped)" : "");
+  std::printf("  %-18s %10.3f ms\n", "pipeline total", pipeline_ms);
+
+  if (!a.output.empty()) {
+    std::map<std::string, glint::Image> out = std::move(in.layers);
+    for (const auto& name : glint::pipeline_layer_names()) {
+      if (out.count(name))
+        std::fprintf(stderr, "glint-exr: note: input layer \"%s\" is replaced by the pipeline's\n",
+                     name.c_str());
+      out[name] = std::move(res.layers.at(name));
+    }
+    glint::ExrWriteOptions wo;
+    wo.projection = pin.projection;
+    wo.compression = a.compression;
+    const auto& o = a.opt;
+    wo.options = "max_distance=" + number(o.trace.max_distance) +
+                 " resolution=" + number(o.trace.resolution) +
+                 " steps=" + std::to_string(o.trace.steps) +
+                 " thickness=" + number(o.trace.thickness) +
+                 " march=" + glint::to_string(o.trace.march) +
+                 " blur_size=" + std::to_string(o.blur.size) +
+                 " blur_separation=" + number(o.blur.separation) +
+                 " combine=" + glint::to_string(o.combine) + " backend=" + backend->name();
+    t0 = Clock::now();
+    glint::write_exr(a.output, out, wo);
+    std::printf("  %-18s %10.3f ms\n", "write exr", ms_since(t0));
+    if (!a.png.empty()) {
+      t0 = Clock::now();
+      glint::write_png_srgb(a.png, out.at("combined"));
+      std::printf("  %-18s %10.3f ms\n", "write png", ms_since(t0));
+    }
+    std::printf("wrote %s (%zu layers)\n", a.output.c_str(), out.size());
+  } else {
+    t0 = Clock::now();
+    glint::write_png_srgb(a.png, res.layers.at("combined"));
+    std::printf("  %-18s %10.3f ms\n", "write png", ms_since(t0));
+  }
+  if (!a.png.empty()) std::printf("wrote %s\n", a.png.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args args;
+  try {
+    bool help = false;
+    args = parse_args(argc, argv, help);
+    if (help) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "glint-exr: %s\n", e.message.c_str());
+    return 2;
+  }
+  try {
+    return run(args);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "glint-exr: error: %s\n", e.what());
+    return 1;
+  }
+}
