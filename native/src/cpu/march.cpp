@@ -217,7 +217,10 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
   float position_to[4] = {from.x, from.y, from.z, 1.0f};
 
   // First pass: samples at start_frag + k * increment, k = 1 .. int(delta).
-  const int64_t n = static_cast<int64_t>(delta);
+  // int(delta) of the seed; a ray whose end projects absurdly far off-screen
+  // (an end point grazing the near plane) is capped before the conversion
+  // overflows. Only the on-screen samples are probed anyway.
+  const int64_t n = delta < 4.0e18f ? static_cast<int64_t>(delta) : static_cast<int64_t>(4.0e18);
   if (n > 0) {
     int64_t k0, k1;
     onscreen_range(start_frag[0], start_frag[1], inc_x, inc_y, n, tex_w, tex_h, k0, k1);
