@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Set up everything Glint needs on Debian 12 and build it. Idempotent: packages
+# already installed are not touched, and the build is incremental.
+#   GLINT_BUILD_DIR  build directory (default: <checkout>/build)
+#   GLINT_NO_APT=1   skip the package step (e.g. no root)
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${GLINT_BUILD_DIR:-$root/build}
+
+packages=(
+  build-essential cmake ninja-build pkg-config zlib1g-dev
+  python3-dev python3-numpy python3-pytest pybind11-dev
+  libglm-dev libopenexr-dev
+  libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
+  googletest libgtest-dev libbenchmark-dev
+  blender
+)
+
+if [[ "${GLINT_NO_APT:-0}" != 1 ]]; then
+  missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if ((${#missing[@]})); then
+    echo "glint setup: installing ${missing[*]}"
+    sudo_cmd=()
+    [[ $(id -u) -ne 0 ]] && sudo_cmd=(sudo)
+    "${sudo_cmd[@]}" apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
+fi
+
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" -j"$(nproc)"
+echo "glint setup: built in $build (python module: $build/python)"

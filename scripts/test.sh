@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Set up, build and run every test: the C++ tests through ctest, then the
+# Python, add-on and Blender tests through Debian's pytest. Exits non-zero
+# when anything fails.
+set -uo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+export GLINT_BUILD_DIR=${GLINT_BUILD_DIR:-$root/build}
+export GLINT_TEST_OUT=${GLINT_TEST_OUT:-$GLINT_BUILD_DIR/test-out}
+
+bash "$root/scripts/setup.sh" || exit 1
+
+status=0
+echo "== ctest"
+ctest --test-dir "$GLINT_BUILD_DIR" --output-on-failure -j2 || status=1
+
+echo "== pytest"
+cd "$root"
+suites=()
+for d in tests/python tests/addon tests/blender; do
+  [[ -d $d ]] && suites+=("$d")
+done
+/usr/bin/python3 -m pytest -q -p no:cacheprovider "${suites[@]}" || status=1
+
+exit $status
