@@ -15,6 +15,7 @@ using namespace pybind11::literals;
 namespace glint::py {
 
 void bind_exr(pyb::module_& m);
+void bind_raster(pyb::module_& m);
 
 namespace {
 
@@ -202,5 +203,6 @@ PYBIND11_MODULE(glint_core, m) {
       "The backend a name resolves to ('auto' -> 'gl' or 'cpu'); raises BackendUnavailable.");
 
   bind_exr(m);
+  bind_raster(m);
 
 }

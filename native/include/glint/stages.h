@@ -15,6 +15,7 @@
 #include "glint/image.h"
 #include "glint/options.h"
 #include "glint/projection.h"
+#include "glint/raster.h"
 
 namespace glint {
 
@@ -61,6 +62,8 @@ class Backend {
   // mix(color, blurred, roughness) * specular amount; 0 where the amount <= 0.
   virtual Image reflection(const Image& color, const Image& blurred, const Image& specular) = 0;
   virtual Image combine(const Image& base, const Image& reflection, Combine mode) = 0;
+  // G-buffers (position, normal, specular) from view-space triangles; see raster.h.
+  virtual GBufferImages rasterize(const RasterInputs& in) = 0;
 };
 
 // The CPU reference backend. threads = 0: one per hardware thread.

@@ -7,6 +7,7 @@
 #include "glint/stages.h"
 #include "march.h"
 #include "parallel.h"
+#include "raster.h"
 
 namespace glint {
 namespace {
@@ -200,6 +201,8 @@ class CpuBackend final : public Backend {
     });
     return out;
   }
+
+  GBufferImages rasterize(const RasterInputs& in) override { return cpu::rasterize(in, threads_); }
 
  private:
   int threads_;
