@@ -204,5 +204,4 @@ PYBIND11_MODULE(glint_core, m) {
 
   bind_exr(m);
   bind_raster(m);
-
 }

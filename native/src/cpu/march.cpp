@@ -72,9 +72,12 @@ inline bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_fr
 
 // FIX 2: the length of the ray, shortened so that its end stays on or in
 // front of the near plane (clip z >= -w) with w > 0. The plane test is
-// linear along the ray, so the crossing is solved in double; float rounding
-// of the end point is then checked and, at the extremes (a far point 1e7
-// away with a 1e-4 near plane), the ray halved until the end is valid.
+// linear along the ray, so the crossing is solved in double. The float end
+// point then lands on the plane give or take a rounding step, so it is
+// checked and, while behind, pulled back by a shrink that starts at a few
+// float steps and doubles each time: ordinary rays lose ~1e-7 of their
+// length, while the extremes (a point 1e7 away with a 1e-4 near plane) still
+// reach a valid end within a few dozen tries.
 // Returns a negative length where the origin itself is not in front.
 float clipped_length(const MarchSetup& s, V3 from, V3 dir, float max_distance) {
   const double* P = s.projd;
@@ -86,11 +89,14 @@ float clipped_length(const MarchSetup& s, V3 from, V3 dir, float max_distance) {
   double len = max_distance;
   const double n1 = near_fn(from.x + dir.x * len, from.y + dir.y * len, from.z + dir.z * len);
   if (n1 < 0.0) len = len * (n0 / (n0 - n1));
-  float lf = static_cast<float>(len);
+  const float full = static_cast<float>(len);
+  float lf = full;
+  float shrink = 1.0f / 4194304.0f;  // 2^-22: two float steps of the length
   for (int i = 0; i < 64; ++i) {
     const V3 e = from + dir * lf;
     if (near_fn(e.x, e.y, e.z) >= 0.0 && clip_row(P, 3, e.x, e.y, e.z) > 0.0) return lf;
-    lf *= 0.5f;
+    lf = full * (1.0f - shrink);
+    shrink = shrink * 2.0f > 1.0f ? 1.0f : shrink * 2.0f;
   }
   return 0.0f;
 }
