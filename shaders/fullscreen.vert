@@ -1,0 +1,8 @@
+#version 430 core
+// One triangle that covers the viewport: every fragment pass draws it, so each
+// pixel of the target runs the fragment shader exactly once.
+
+void main() {
+  const vec2 corners[3] = vec2[3](vec2(-1.0, -1.0), vec2(3.0, -1.0), vec2(-1.0, 3.0));
+  gl_Position = vec4(corners[gl_VertexID], 0.0, 1.0);
+}
