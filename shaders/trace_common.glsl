@@ -10,6 +10,8 @@ uniform bool u_has_specular;   // TraceInputs::specular was given: skip non-refl
 uniform float u_proj[16];   // projection, row-major, rows as printed
 uniform double u_projd[16]; // the same in double, for the near-plane clipping
 uniform int u_kind;         // 0 perspective, 1 orthographic, 2 general (glint::ProjectionKind)
+uniform int u_eye_kind;     // 0 origin, 1 point, 2 direction (cpu::MarchSetup::Eye)
+uniform vec3 u_eye;         // the eye point, or the unit direction of parallel view rays
 uniform vec2 u_size;        // float(width), float(height)
 
 uniform float u_max_distance;
@@ -74,8 +76,18 @@ bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
   vec3 n = texelFetch(u_normal, px, 0).xyz;
   if (!finite_v3(n) || dot3(n, n) == 0.0) return false;
   from = p.xyz;
-  if (dot3(from, from) == 0.0) return false;
-  unit_from = normalize3(from);
+  // The incident direction (see march.cpp read_origin): the view ray of the
+  // camera, which for an orthographic one is the same for every pixel.
+  if (u_eye_kind == 0) {
+    if (dot3(from, from) == 0.0) return false;
+    unit_from = normalize3(from);
+  } else if (u_eye_kind == 1) {
+    vec3 d = from - u_eye;
+    if (dot3(d, d) == 0.0) return false;
+    unit_from = normalize3(d);
+  } else {
+    unit_from = u_eye;
+  }
   normal = normalize3(n);
   return finite_v3(unit_from) && finite_v3(normal);
 }

@@ -64,8 +64,19 @@ inline bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_fr
   normal = {n[0], n[1], n[2]};
   if (!finite(normal) || dot(normal, normal) == 0.0f) return false;
   from = {p[0], p[1], p[2]};
-  if (dot(from, from) == 0.0f) return false;
-  unit_from = normalize(from);
+  // The incident direction: the seed's normalize(position) is the view ray of
+  // a camera at the origin. An orthographic camera's view rays are parallel,
+  // so reflecting normalize(position) there would mirror the wrong ray.
+  if (s.eye_kind == MarchSetup::Eye::Origin) {
+    if (dot(from, from) == 0.0f) return false;
+    unit_from = normalize(from);
+  } else if (s.eye_kind == MarchSetup::Eye::Point) {
+    const V3 d = from - V3{s.eye[0], s.eye[1], s.eye[2]};
+    if (dot(d, d) == 0.0f) return false;
+    unit_from = normalize(d);
+  } else {
+    unit_from = {s.eye[0], s.eye[1], s.eye[2]};
+  }
   normal = normalize(normal);
   return finite(unit_from) && finite(normal);
 }
@@ -145,6 +156,40 @@ void onscreen_range(double sx, double sy, double ix, double iy, int64_t n, doubl
 
 }  // namespace
 
+void camera_eye(const Mat4& P, MarchSetup::Eye& kind, float eye[3]) {
+  // Null vector of the 3x4 matrix of rows 0, 1, 3, by cofactors.
+  const int rows[3] = {0, 1, 3};
+  double e[4];
+  for (int c = 0; c < 4; ++c) {
+    int cols[3], k = 0;
+    for (int j = 0; j < 4; ++j)
+      if (j != c) cols[k++] = j;
+    auto m = [&](int r, int cc) { return P(rows[r], cols[cc]); };
+    const double minor = m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) -
+                         m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0)) +
+                         m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
+    e[c] = (c % 2 ? -1.0 : 1.0) * minor;
+  }
+  const double len = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3]);
+  if (classify_projection(P) == ProjectionKind::Perspective || len == 0.0) {
+    kind = MarchSetup::Eye::Origin;
+    eye[0] = eye[1] = eye[2] = 0.0f;
+    return;
+  }
+  if (std::fabs(e[3]) > 1e-12 * len) {
+    kind = MarchSetup::Eye::Point;
+    for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(e[i] / e[3]);
+    return;
+  }
+  // An eye at infinity: the rays run along e. Point them into the scene, the
+  // way normalized device depth grows (OpenGL: near -1, far +1).
+  const double dz = P(2, 0) * e[0] + P(2, 1) * e[1] + P(2, 2) * e[2];
+  const double sign = dz >= 0.0 ? 1.0 : -1.0;
+  const double dl = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  kind = MarchSetup::Eye::Direction;
+  for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(sign * e[i] / dl);
+}
+
 MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
                       const TraceOptions& opt) {
   MarchSetup s;
@@ -156,6 +201,7 @@ MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& pr
   }
   s.kind = classify_projection(projection);
   s.opt = opt;
+  camera_eye(projection, s.eye_kind, s.eye);
   return s;
 }
 

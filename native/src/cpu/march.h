@@ -15,7 +15,16 @@ struct MarchSetup {
   double projd[16];  // the same in double, for near-plane clipping
   ProjectionKind kind = ProjectionKind::Perspective;
   TraceOptions opt;
+  // Where the camera looks from, for the incident direction of each pixel.
+  // Origin: the seed's normalize(position). Point: normalize(position - eye).
+  // Direction: an orthographic camera's rays are all parallel to `eye`.
+  enum class Eye { Origin, Point, Direction } eye_kind = Eye::Origin;
+  float eye[3] = {0.0f, 0.0f, 0.0f};
 };
+
+// The camera centre of a projection: the homogeneous point e with rows 0, 1
+// and 3 of P e = 0 (it projects to no pixel). Exposed for the GL backend.
+void camera_eye(const Mat4& projection, MarchSetup::Eye& kind, float eye[3]);
 
 MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
                       const TraceOptions& opt);

@@ -53,6 +53,7 @@ namespace glint::gl {
   X(PFNGLUNIFORM1IPROC, Uniform1i)                                     \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                                     \
   X(PFNGLUNIFORM2FPROC, Uniform2f)                                     \
+  X(PFNGLUNIFORM3FPROC, Uniform3f)                                     \
   X(PFNGLUNIFORM4IPROC, Uniform4i)                                     \
   X(PFNGLUNIFORM1FVPROC, Uniform1fv)                                   \
   X(PFNGLUNIFORM1DVPROC, Uniform1dv)                                   \

@@ -24,6 +24,7 @@
 
 #include "gl/egl_context.h"
 #include "gl/gl_backend.h"
+#include "cpu/march.h"
 #include "gl/program.h"
 #include "glint/backend.h"
 #include "glint/errors.h"
@@ -84,6 +85,11 @@ class GlState {
     gl_.Uniform1fv(loc(prog, "u_proj"), 16, pf);
     gl_.Uniform1dv(loc(prog, "u_projd"), 16, in.projection.m.data());
     gl_.Uniform1i(loc(prog, "u_kind"), static_cast<int>(classify_projection(in.projection)));
+    cpu::MarchSetup::Eye eye_kind;
+    float eye[3];
+    cpu::camera_eye(in.projection, eye_kind, eye);
+    gl_.Uniform1i(loc(prog, "u_eye_kind"), static_cast<int>(eye_kind));
+    gl_.Uniform3f(loc(prog, "u_eye"), eye[0], eye[1], eye[2]);
     gl_.Uniform2f(loc(prog, "u_size"), static_cast<float>(w), static_cast<float>(h));
     gl_.Uniform1f(loc(prog, "u_max_distance"), opt.max_distance);
     gl_.Uniform1f(loc(prog, "u_thickness"), opt.thickness);
