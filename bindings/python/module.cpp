@@ -150,7 +150,15 @@ PYBIND11_MODULE(glint_core, m) {
         BlurOptions o;
         o.size = size;
         o.separation = separation;
-        validate(o);
+        try {
+          validate(o);
+        } catch (const InvalidArgument& e) {
+          // The options struct names its fields as pipeline() spells them;
+          // this function's keywords are `size` and `separation`.
+          const std::string kw = e.argument() == "blur_size" ? "size" : "separation";
+          const std::string msg = e.what();
+          throw InvalidArgument(kw, msg.substr(msg.find(": ") + 2));
+        }
         auto be = get_backend(backend);
         pyb::gil_scoped_release release;
         Image r = be->box_blur(src, o, nullptr);
