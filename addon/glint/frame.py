@@ -1,0 +1,130 @@
+"""One frame of Glint: export -> rasterize -> trace -> images for the compositor.
+
+Called from the render's ``frame_change_post`` handler with the render's own
+evaluated depsgraph (never ``bpy.context``). Returns a :class:`state.FrameReport`;
+raises nothing for expected failures (missing module, GL, core errors): those
+become a report and the frame renders without reflections.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import compositor, gather, native
+from .logic import compositing, settings as settings_logic
+from .logic.progress import Cancelled, Progress, Timings
+from .state import STATE, FrameReport, log
+
+
+def settings_dict(glint) -> dict:
+    """The scene's Glint settings as plain values."""
+    return {
+        "max_distance": glint.max_distance, "resolution": glint.resolution, "steps": glint.steps,
+        "thickness": glint.thickness, "march": glint.march, "blur_size": glint.blur_size,
+        "backend": glint.backend, "debug_view": glint.debug_view, "write_layers_exr": glint.write_layers_exr,
+    }
+
+
+def _rasterize(core, exp: gather.SceneExport, backend: str):
+    t = exp.triangles
+    kwargs = {}
+    if t.uvs is not None and exp.normal_maps:
+        kwargs = dict(uvs=t.uvs, tangents=t.tangents, material_normal_map=exp.material_normal_map,
+                      normal_maps=exp.normal_maps)
+    cam = exp.camera
+    return core.rasterize(t.positions, t.normals, t.material_index, exp.materials,
+                          cam.projection.astype(np.float32), cam.width, cam.height, backend=backend, **kwargs)
+
+
+def resolve_backend(core, requested: str) -> str:
+    """The backend a setting names ('auto' -> 'gl' or 'cpu'); 'auto' falls back to
+    the CPU when no GL context can be made, 'gl' raises BackendUnavailable."""
+    try:
+        return core.backend_name(requested)
+    except core.BackendUnavailable as exc:
+        if requested != "auto":
+            raise
+        log(f"OpenGL backend unavailable ({exc}); using the CPU backend")
+        return "cpu"
+
+
+def _with_backend(core, backend: str, requested: str, call):
+    """Run ``call(backend)``; when GL fails mid-way and the user asked for 'auto',
+    run it again on the CPU."""
+    try:
+        return call(backend), backend
+    except core.BackendUnavailable as exc:
+        if requested != "auto" or backend == "cpu":
+            raise
+        log(f"OpenGL backend failed ({exc}); using the CPU backend")
+        return call("cpu"), "cpu"
+
+
+def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport:
+    """Export, rasterize and trace the frame; fill the compositor's images."""
+    glint = scene.glint
+    values = settings_dict(glint)
+    report = FrameReport(frame=depsgraph.scene_eval.frame_current)
+    timings = Timings()
+    core = native.load()
+    if core is None:
+        report.status, report.message = "error", native.error()
+        return report
+    progress = Progress(0, report=progress_report, should_stop=should_stop, label="Glint export")
+    try:
+        with timings.measure("export"):
+            exp = gather.export_scene(depsgraph, progress)
+        cam = exp.camera
+        report.width, report.height = cam.width, cam.height
+        report.objects, report.culled = exp.objects, exp.culled
+        report.triangles = exp.triangles.count
+        if not exp.any_reflective:
+            report.status, report.message = "skipped", "no reflective material in view"
+            report.timings_ms = timings.ms
+            return report
+        requested = settings_logic.backend_name(values["backend"])
+        with timings.measure("rasterize"):
+            backend = resolve_backend(core, requested)
+            gbuf, used = _with_backend(core, backend, requested, lambda b: _rasterize(core, exp, b))
+        progress.check()
+        position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
+        mask = compositing.mask_image(position, specular)
+        report.reflective_pixels = int(np.count_nonzero(mask[..., 0] > 0))
+        report.backend = used
+        if report.reflective_pixels == 0:
+            report.status, report.message = "skipped", "no reflective pixel on screen"
+            report.timings_ms = timings.ms
+            return report
+        kwargs = settings_logic.trace_kwargs(values)
+        n_trace = compositing.trace_normals(normal, position, specular)
+        proj32 = cam.projection.astype(np.float32)
+        with timings.measure("trace"):
+            uv, used = _with_backend(core, used, requested,
+                                     lambda b: core.trace(position, n_trace, proj32, backend=b, **kwargs))
+        report.backend = used
+        progress.check()
+        with timings.measure("images"):
+            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_MASK: mask}
+            view = values["debug_view"]
+            if view in compositing.GBUFFER_DEBUG_VIEWS:
+                images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
+            if values["write_layers_exr"]:
+                images[compositing.IMAGE_POSITION] = position
+                n4 = np.array(normal, dtype=np.float32, copy=True)
+                n4[..., 3] = 1.0
+                images[compositing.IMAGE_NORMAL] = n4
+                images[compositing.IMAGE_SPECULAR] = specular
+            compositor.fill_images(images)
+        with STATE.lock:
+            STATE.arrays = {"position": position, "normal": normal, "specular": specular, "uv": uv,
+                            "projection": cam.projection, "view": cam.view, "frame": report.frame}
+        report.status = "ok"
+    except Cancelled as exc:
+        report.status, report.message = "cancelled", str(exc)
+    except gather.SkipFrame as exc:
+        report.status, report.message = "skipped", str(exc)
+    except core.BackendUnavailable as exc:
+        report.status, report.message = "error", f"backend unavailable: {exc}"
+    except (ValueError, RuntimeError, MemoryError) as exc:
+        report.status, report.message = "error", f"{type(exc).__name__}: {exc}"
+    report.timings_ms = timings.ms
+    return report

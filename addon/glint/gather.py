@@ -1,0 +1,395 @@
+"""Blender -> plain data: small gather functions, one per kind of thing.
+
+Each function reads what Glint needs from an *evaluated* depsgraph (the one the
+render hands to ``frame_change_post``) and returns numpy arrays or plain dicts
+for the logic modules. The few API differences between Blender 3.4 and 4.x are
+confined to :func:`corner_normals` and :func:`principled_inputs`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .logic import frustum, geometry, materials, projection
+
+GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
+
+NO_SPECULAR_NODES = {
+    "ShaderNodeBsdfDiffuse", "ShaderNodeEmission", "ShaderNodeBsdfTranslucent",
+    "ShaderNodeBsdfTransparent", "ShaderNodeHoldout", "ShaderNodeSubsurfaceScattering",
+    "ShaderNodeBsdfVelvet", "ShaderNodeBsdfSheen", "ShaderNodeBackground", "ShaderNodeBsdfHair",
+    "ShaderNodeBsdfHairPrincipled", "ShaderNodeBsdfToon", "ShaderNodeBsdfRefraction",
+    "ShaderNodeVolumeAbsorption", "ShaderNodeVolumeScatter", "ShaderNodeVolumePrincipled",
+}
+
+
+class SkipFrame(Exception):
+    """The frame cannot get reflections (the message says why); it renders without."""
+
+
+# ----------------------------------------------------------------------------
+# Camera
+
+
+@dataclass
+class CameraInfo:
+    projection: np.ndarray  # 4x4, float64
+    view: np.ndarray  # 4x4 world -> view
+    width: int
+    height: int
+    kind: str  # perspective / orthographic
+    name: str
+
+
+def camera(depsgraph) -> CameraInfo:
+    """The render camera's projection (``calc_matrix_camera`` at the render's size,
+    pixel aspect and percentage; shift and sensor fit included) and view matrix."""
+    scene = depsgraph.scene_eval
+    cam = scene.camera
+    if cam is None:
+        raise SkipFrame("the scene has no camera")
+    cam = cam.evaluated_get(depsgraph)
+    data = cam.data if cam.type == "CAMERA" else None
+    if data is not None and data.type == "PANO":
+        raise SkipFrame(f"camera {cam.name!r} is panoramic; screen-space reflections need a "
+                        f"perspective or orthographic camera, so this frame is skipped")
+    r = scene.render
+    if r.use_border and r.use_crop_to_border:
+        raise SkipFrame("render region with 'Crop to Render Region' is not supported")
+    w, h = projection.render_size(r.resolution_x, r.resolution_y, r.resolution_percentage)
+    proj = np.array(cam.calc_matrix_camera(depsgraph, x=w, y=h, scale_x=r.pixel_aspect_x,
+                                           scale_y=r.pixel_aspect_y), dtype=np.float64)
+    try:
+        kind = projection.classify_projection(proj)
+    except projection.ProjectionError as exc:
+        raise SkipFrame(f"camera {cam.name!r}: {exc}") from exc
+    view = projection.view_matrix(np.array(cam.matrix_world, dtype=np.float64))
+    return CameraInfo(proj, view, w, h, kind, cam.name)
+
+
+# ----------------------------------------------------------------------------
+# Materials
+
+
+def _socket_value(socket):
+    v = getattr(socket, "default_value", None)
+    if v is None:
+        return None
+    try:
+        return tuple(float(x) for x in v)
+    except TypeError:
+        return float(v)
+
+
+def _linked_node(socket):
+    """The node feeding ``socket`` (through reroutes), or None."""
+    seen = 0
+    while socket is not None and socket.is_linked and seen < 64:
+        link = socket.links[0]
+        if not link.is_valid or link.is_muted:
+            return None
+        node = link.from_node
+        if node.bl_idname == "NodeReroute":
+            socket = node.inputs[0]
+            seen += 1
+            continue
+        return node
+    return None
+
+
+def principled_inputs(node) -> Dict[str, object]:
+    """The Principled BSDF's unlinked input values by name (3.4's and 4.x's names
+    both pass through; :func:`materials.principled_specular` tells them apart)."""
+    out = {}
+    for sock in node.inputs:
+        if sock.type in {"VALUE", "RGBA", "VECTOR"} and hasattr(sock, "default_value"):
+            out[sock.name] = _socket_value(sock)
+    return out
+
+
+def describe_shader(node, depth: int = 0) -> Optional[dict]:
+    """A shader node (the one feeding Material Output > Surface) as a plain dict."""
+    if node is None or depth > 32:
+        return {"kind": "none"}
+    idn = node.bl_idname
+    if node.mute:
+        return {"kind": "none"}
+    if idn == "ShaderNodeBsdfPrincipled":
+        return {"kind": "principled", "inputs": principled_inputs(node)}
+    if idn in {"ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"}:
+        return {"kind": "glossy", "color": _socket_value(node.inputs["Color"]),
+                "roughness": _socket_value(node.inputs["Roughness"])}
+    if idn == "ShaderNodeEeveeSpecular":
+        return {"kind": "specular", "color": _socket_value(node.inputs["Specular"]),
+                "roughness": _socket_value(node.inputs["Roughness"])}
+    if idn == "ShaderNodeBsdfGlass":
+        return {"kind": "glass", "ior": _socket_value(node.inputs["IOR"]),
+                "roughness": _socket_value(node.inputs["Roughness"])}
+    if idn == "ShaderNodeMixShader":
+        fac_sock = node.inputs[0]
+        fac = 0.5 if fac_sock.is_linked else _socket_value(fac_sock)
+        return {"kind": "mix", "fac": fac, "a": describe_shader(_linked_node(node.inputs[1]), depth + 1),
+                "b": describe_shader(_linked_node(node.inputs[2]), depth + 1)}
+    if idn == "ShaderNodeAddShader":
+        return {"kind": "add", "a": describe_shader(_linked_node(node.inputs[0]), depth + 1),
+                "b": describe_shader(_linked_node(node.inputs[1]), depth + 1)}
+    if idn in NO_SPECULAR_NODES:
+        return {"kind": "none"}
+    return None  # unknown (node groups, custom nodes): the caller falls back to viewport values
+
+
+def _viewport(mat) -> dict:
+    return {"kind": "viewport", "specular_color": tuple(mat.specular_color),
+            "specular_intensity": mat.specular_intensity, "roughness": mat.roughness,
+            "metallic": mat.metallic, "diffuse_color": tuple(mat.diffuse_color)}
+
+
+def _surface_node(mat):
+    tree = mat.node_tree
+    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
+    if not outputs:
+        return None, False
+    active = [n for n in outputs if n.is_active_output] or outputs
+    return _linked_node(active[0].inputs["Surface"]), True
+
+
+@dataclass
+class NormalMapRef:
+    image: object  # bpy.types.Image
+    strength: float
+    uv_map: str
+
+
+def _normal_map_of(shader_node) -> Optional[NormalMapRef]:
+    """A tangent-space Normal Map node fed by an Image Texture, on the shader's Normal."""
+    if shader_node is None or "Normal" not in shader_node.inputs:
+        return None
+    nm = _linked_node(shader_node.inputs["Normal"])
+    if nm is None or nm.bl_idname != "ShaderNodeNormalMap" or nm.space != "TANGENT":
+        return None
+    tex = _linked_node(nm.inputs["Color"])
+    if tex is None or tex.bl_idname != "ShaderNodeTexImage" or tex.image is None:
+        return None
+    strength = nm.inputs["Strength"]
+    return NormalMapRef(tex.image, 1.0 if strength.is_linked else float(strength.default_value), nm.uv_map)
+
+
+def material_info(mat) -> Tuple[materials.SpecularSpec, Optional[NormalMapRef]]:
+    """The specular spec of a material and its normal map, if any."""
+    hardness = mat.get("hardness") if mat is not None else None
+    if hardness is not None:
+        try:
+            hardness = float(hardness)
+        except (TypeError, ValueError):
+            hardness = None
+    if not mat.use_nodes or mat.node_tree is None:
+        return materials.material_spec(_viewport(mat), hardness), None
+    node, has_output = _surface_node(mat)
+    if not has_output:
+        return materials.material_spec(_viewport(mat), hardness), None
+    desc = describe_shader(node) if node is not None else {"kind": "none"}
+    if desc is None:
+        desc = _viewport(mat)
+    return materials.material_spec(desc, hardness), _normal_map_of(node)
+
+
+class MaterialTable:
+    """Global material rows for the rasterizer; row 0 is "no material" (no specular)."""
+
+    def __init__(self):
+        self.rows: List[Tuple[float, float, float, float]] = [materials.NO_SPECULAR.row()]
+        self.normal_map_of_row: List[int] = [-1]
+        self.normal_maps: List[NormalMapRef] = []
+        self._index: Dict[int, int] = {}
+        self._map_index: Dict[int, int] = {}
+
+    def index_of(self, mat) -> int:
+        if mat is None:
+            return 0
+        key = mat.original.as_pointer() if hasattr(mat, "original") else mat.as_pointer()
+        if key in self._index:
+            return self._index[key]
+        spec, nmap = material_info(mat)
+        map_index = -1
+        if nmap is not None and spec.amount > 0:
+            ikey = nmap.image.as_pointer()
+            if ikey not in self._map_index:
+                self._map_index[ikey] = len(self.normal_maps)
+                self.normal_maps.append(nmap)
+            map_index = self._map_index[ikey]
+        self.rows.append(spec.row())
+        self.normal_map_of_row.append(map_index)
+        self._index[key] = len(self.rows) - 1
+        return self._index[key]
+
+    def reflective(self, index: int) -> bool:
+        r = self.rows[index]
+        return (r[0] + r[1] + r[2]) > 0.0
+
+    def array(self) -> np.ndarray:
+        return np.asarray(self.rows, dtype=np.float32).reshape(-1, 4)
+
+
+def normal_map_pixels(ref: NormalMapRef) -> np.ndarray:
+    """The image's pixels as [h, w, 3] with the node's strength baked in."""
+    img = ref.image
+    w, h = img.size
+    if w == 0 or h == 0:
+        raise ValueError(f"normal map image {img.name!r} has no pixels")
+    buf = np.empty(w * h * img.channels, dtype=np.float32)
+    img.pixels.foreach_get(buf)
+    px = buf.reshape(h, w, img.channels)
+    if img.channels < 3:
+        raise ValueError(f"normal map image {img.name!r} has {img.channels} channels, expected 3 or 4")
+    return geometry.normal_map_with_strength(px, ref.strength)
+
+
+# ----------------------------------------------------------------------------
+# Meshes
+
+
+def corner_normals(mesh) -> np.ndarray:
+    """One normal per face corner. Blender 4.1+ has ``Mesh.corner_normals``;
+    3.4 computes them into the loops with ``calc_normals_split``."""
+    n = np.empty(len(mesh.loops) * 3, dtype=np.float32)
+    if hasattr(mesh, "corner_normals"):
+        mesh.corner_normals.foreach_get("vector", n)
+    else:
+        mesh.calc_normals_split()
+        mesh.loops.foreach_get("normal", n)
+    return n.reshape(-1, 3)
+
+
+def mesh_arrays(mesh, uv_map: Optional[str] = None) -> geometry.MeshArrays:
+    """Triangles, corner normals and (when ``uv_map`` is given) UVs and tangents."""
+    mesh.calc_loop_triangles()
+    t = len(mesh.loop_triangles)
+    tri_verts = np.empty(t * 3, dtype=np.int32)
+    tri_loops = np.empty(t * 3, dtype=np.int32)
+    tri_mat = np.empty(t, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tri_verts)
+    mesh.loop_triangles.foreach_get("loops", tri_loops)
+    mesh.loop_triangles.foreach_get("material_index", tri_mat)
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    arrays = geometry.MeshArrays(co.reshape(-1, 3), tri_verts.reshape(-1, 3), tri_loops.reshape(-1, 3),
+                                 tri_mat, corner_normals(mesh))
+    if uv_map is not None and len(mesh.uv_layers):
+        layer = mesh.uv_layers.get(uv_map) if uv_map else None
+        layer = layer or mesh.uv_layers.active or mesh.uv_layers[0]
+        nl = len(mesh.loops)
+        uv = np.empty(nl * 2, dtype=np.float32)
+        layer.data.foreach_get("uv", uv)
+        arrays.corner_uvs = uv.reshape(-1, 2)
+        try:
+            mesh.calc_tangents(uvmap=layer.name)
+        except RuntimeError:
+            arrays.corner_tangents = None  # n-gons: no tangent space; the map is left out
+        else:
+            tan = np.empty(nl * 3, dtype=np.float32)
+            sign = np.empty(nl, dtype=np.float32)
+            mesh.loops.foreach_get("tangent", tan)
+            mesh.loops.foreach_get("bitangent_sign", sign)
+            arrays.corner_tangents = np.concatenate([tan.reshape(-1, 3), sign[:, None]], axis=1)
+    return arrays
+
+
+# ----------------------------------------------------------------------------
+# The scene
+
+
+@dataclass
+class SceneExport:
+    camera: CameraInfo
+    triangles: geometry.Triangles
+    materials: np.ndarray  # [M, 4]
+    material_normal_map: np.ndarray  # [M] int32
+    normal_maps: List[np.ndarray] = field(default_factory=list)
+    objects: int = 0
+    culled: int = 0
+    any_reflective: bool = False
+
+
+def _visible_instance(inst) -> bool:
+    ob = inst.object
+    if ob.type not in GEOMETRY_TYPES:
+        return False
+    # The render depsgraph already leaves out objects hidden from render;
+    # this also drops objects the camera's rays do not see.
+    if not inst.is_instance and ob.original.hide_render:
+        return False
+    if getattr(ob, "visible_camera", True) is False:
+        return False
+    return True
+
+
+def _slot_materials(ob) -> List[object]:
+    return [slot.material for slot in ob.material_slots]
+
+
+def export_scene(depsgraph, progress=None) -> SceneExport:
+    """Every visible mesh instance in the camera's view, as view-space triangles.
+
+    Two passes over the instances: the first (cheap: bounding boxes and material
+    slots) decides whether anything reflective is in view; only then does the
+    second fetch meshes. A scene without reflective materials costs one pass.
+    """
+    cam = camera(depsgraph)
+    clip_from_world = cam.projection @ cam.view
+    table = MaterialTable()
+    candidates = 0
+    culled = 0
+    any_reflective = False
+    for inst in depsgraph.object_instances:
+        if not _visible_instance(inst):
+            continue
+        ob = inst.object
+        m = np.array(inst.matrix_world, dtype=np.float64)
+        if frustum.outside_frustum(clip_from_world @ m, frustum.box_corners(ob.bound_box)):
+            culled += 1
+            continue
+        candidates += 1
+        slots = [table.index_of(mat) for mat in _slot_materials(ob)]
+        if any(table.reflective(i) for i in slots):
+            any_reflective = True
+    if progress is not None:
+        progress.total = candidates
+    result = SceneExport(cam, geometry.concatenate([]), table.array(), np.asarray(table.normal_map_of_row, np.int32),
+                         objects=candidates, culled=culled, any_reflective=any_reflective)
+    if not any_reflective:
+        return result
+
+    parts: List[geometry.Triangles] = []
+    cache: Dict[Tuple[int, Optional[str]], geometry.MeshArrays] = {}
+    for inst in depsgraph.object_instances:
+        if not _visible_instance(inst):
+            continue
+        ob = inst.object
+        m = np.array(inst.matrix_world, dtype=np.float64)
+        if frustum.outside_frustum(clip_from_world @ m, frustum.box_corners(ob.bound_box)):
+            continue
+        slots = [table.index_of(mat) for mat in _slot_materials(ob)]
+        uv_map = None
+        for i in slots:
+            mi = table.normal_map_of_row[i]
+            if mi >= 0:
+                uv_map = table.normal_maps[mi].uv_map
+                break
+        key = (ob.data.as_pointer() if ob.data is not None else ob.as_pointer(), uv_map)
+        arrays = cache.get(key)
+        if arrays is None:
+            mesh = ob.to_mesh()
+            try:
+                arrays = mesh_arrays(mesh, uv_map)
+            finally:
+                ob.to_mesh_clear()
+            cache[key] = arrays
+        if arrays.triangle_count:
+            parts.append(geometry.mesh_to_view(arrays, cam.view @ m, slots, 0, with_uv_tangents=uv_map is not None))
+        if progress is not None:
+            progress.step(1, f"exported {ob.name}")
+    result.triangles = geometry.concatenate(parts)
+    result.normal_maps = [normal_map_pixels(ref) for ref in table.normal_maps]
+    return result

@@ -1,0 +1,246 @@
+"""Material -> specular buffer: the rule Glint writes into the G-buffer.
+
+The book's specular buffer holds ``(specular r, g, b, shininess / 127.75)``, where
+shininess is Blender Internal's *hardness* divided by 4 (hardness runs 1..511, so
+511 -> 127.75 -> 1.0). Blender 2.8+ has no hardness; this module derives the two
+numbers from what a material does have:
+
+* a custom property ``hardness`` on the material (1..511) sets the shininess
+  directly, as the book's Blender Internal materials did;
+* a Principled BSDF gives the specular colour as its reflectance at normal
+  incidence (F0) and the shininess from its roughness (see
+  :func:`hardness_from_roughness`);
+* other shader nodes have a fixed rule (Glossy = a tinted mirror, Diffuse or
+  Emission = no specular ...), Mix and Add shaders combine their inputs;
+* a material without nodes, or with a shader this module does not know, uses its
+  viewport display values (``specular_color``, ``specular_intensity``,
+  ``roughness``, ``metallic``, ``diffuse_color``), read as a Principled BSDF.
+
+A shader is described by plain dicts (built in Blender by ``gather.py``), so the
+rule is tested here without Blender:
+
+    {"kind": "principled", "inputs": {"Base Color": (r, g, b, a), "Metallic": m, ...}}
+    {"kind": "glossy", "color": (r, g, b), "roughness": r}
+    {"kind": "specular", "color": (r, g, b), "roughness": r}   # Eevee's Specular BSDF
+    {"kind": "glass", "ior": 1.45, "roughness": r}
+    {"kind": "none"}                                          # diffuse, emission, ...
+    {"kind": "mix", "fac": f, "a": <desc>, "b": <desc>}
+    {"kind": "add", "a": <desc>, "b": <desc>}
+    {"kind": "viewport", "specular_color": ..., "specular_intensity": ...,
+     "roughness": ..., "metallic": ..., "diffuse_color": ...}
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Optional, Sequence, Tuple
+
+MIN_HARDNESS = 1.0
+MAX_HARDNESS = 511.0
+# The book: "511 is exported as 127.75", i.e. shininess = hardness / 4.
+HARDNESS_TO_SHININESS = 0.25
+MAX_SHININESS = MAX_HARDNESS * HARDNESS_TO_SHININESS  # 127.75
+
+# Blender 3.x Principled BSDF: dielectric F0 = 0.08 * Specular (0.5 -> 0.04, IOR 1.5).
+PRINCIPLED_3X_F0_PER_SPECULAR = 0.08
+# Rec. 709 luminance, which Blender's Principled BSDF uses for its specular tint.
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+
+RGB = Tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class SpecularSpec:
+    """One row of the material table handed to the rasterizer."""
+
+    color: RGB  # specular colour, linear, each in [0, 1]
+    shininess: float  # the book's units, 0..127.75
+
+    @property
+    def amount(self) -> float:
+        """How strongly the surface reflects: the core's mean of the colour."""
+        return (self.color[0] + self.color[1] + self.color[2]) / 3.0
+
+    @property
+    def alpha(self) -> float:
+        """The specular buffer's alpha: shininess mapped to [0, 1]."""
+        return alpha_from_shininess(self.shininess)
+
+    def row(self) -> Tuple[float, float, float, float]:
+        return (self.color[0], self.color[1], self.color[2], self.shininess)
+
+
+NO_SPECULAR = SpecularSpec((0.0, 0.0, 0.0), 0.0)
+
+
+def _clamp(v: float, lo: float, hi: float) -> float:
+    if not math.isfinite(v):
+        return lo
+    return lo if v < lo else hi if v > hi else v
+
+
+def _rgb(value, default: RGB = (0.0, 0.0, 0.0)) -> RGB:
+    """An RGB triple from a float, an RGB(A) sequence or None."""
+    if value is None:
+        return default
+    if isinstance(value, (int, float)):
+        v = float(value)
+        return (v, v, v)
+    seq = list(value)
+    if len(seq) >= 3:
+        return (float(seq[0]), float(seq[1]), float(seq[2]))
+    raise ValueError(f"expected a colour (3 or 4 numbers), got {value!r}")
+
+
+def _clamp_rgb(c: Sequence[float]) -> RGB:
+    return (_clamp(c[0], 0.0, 1.0), _clamp(c[1], 0.0, 1.0), _clamp(c[2], 0.0, 1.0))
+
+
+def _mix(a: RGB, b: RGB, t: float) -> RGB:
+    return (a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t)
+
+
+def shininess_from_hardness(hardness: float) -> float:
+    """Blender Internal hardness (clamped to 1..511) to the book's shininess (/ 4)."""
+    return _clamp(float(hardness), MIN_HARDNESS, MAX_HARDNESS) * HARDNESS_TO_SHININESS
+
+
+def alpha_from_shininess(shininess: float) -> float:
+    """The specular buffer's alpha: clamp(shininess / 127.75, 0, 1)."""
+    return _clamp(float(shininess) / MAX_SHININESS, 0.0, 1.0)
+
+
+def hardness_from_roughness(roughness: float) -> float:
+    """Blender roughness -> a Blinn-Phong exponent in Blender Internal's 1..511 range.
+
+    Hardness was the exponent of a Blinn-Phong lobe. The usual equivalence between
+    a Blinn-Phong exponent ``n`` and a microfacet width ``alpha`` (Walter et al.
+    2007, "Microfacet models for refraction", eq. 30) is ``n = 2 / alpha^2 - 2``,
+    and Blender's BSDFs square the user's roughness: ``alpha = roughness^2``.
+    Exponents above 511 (roughness below ~0.25) are all "a mirror" for the blur
+    and clamp to 511; roughness 1 gives 0, clamped to the minimum hardness 1.
+    """
+    r = _clamp(float(roughness), 0.0, 1.0)
+    alpha = r * r
+    if alpha * alpha * (MAX_HARDNESS + 2.0) <= 2.0:  # exponent at or above the cap
+        return MAX_HARDNESS
+    return _clamp(2.0 / (alpha * alpha) - 2.0, MIN_HARDNESS, MAX_HARDNESS)
+
+
+def shininess_from_roughness(roughness: float) -> float:
+    return shininess_from_hardness(hardness_from_roughness(roughness))
+
+
+def _luminance(c: RGB) -> float:
+    return LUMINANCE[0] * c[0] + LUMINANCE[1] * c[1] + LUMINANCE[2] * c[2]
+
+
+def _tint_colour(base: RGB) -> RGB:
+    """The Principled BSDF's tint: the base colour at unit luminance (white if black)."""
+    lum = _luminance(base)
+    if lum <= 0.0:
+        return (1.0, 1.0, 1.0)
+    return (base[0] / lum, base[1] / lum, base[2] / lum)
+
+
+def f0_from_ior(ior: float) -> float:
+    """Fresnel reflectance at normal incidence of a dielectric with index ``ior``."""
+    ior = _clamp(float(ior), 1.0, 1e6)
+    return ((ior - 1.0) / (ior + 1.0)) ** 2
+
+
+def principled_specular(inputs: Mapping[str, object]) -> SpecularSpec:
+    """The Principled BSDF rule, for Blender 3.x's and 4.x's input names.
+
+    Colour = F0, the reflectance at normal incidence, mixed by Metallic between
+    the dielectric F0 and the base colour (a metal reflects its base colour):
+
+    * 3.x (``Specular``, ``Specular Tint`` a float): dielectric F0 =
+      0.08 * Specular * mix(white, base colour at unit luminance, Specular Tint);
+    * 4.x (``Specular IOR Level``, ``Specular Tint`` a colour, ``IOR``):
+      dielectric F0 = F0(IOR) * 2 * Specular IOR Level * Specular Tint.
+
+    Shininess comes from Roughness through :func:`hardness_from_roughness`.
+    The colour is not weakened by roughness: the blur spreads rough reflections,
+    the specular amount says how much light the surface reflects.
+    """
+    base = _clamp_rgb(_rgb(inputs.get("Base Color"), (0.8, 0.8, 0.8)))
+    metallic = _clamp(float(inputs.get("Metallic", 0.0)), 0.0, 1.0)
+    roughness = _clamp(float(inputs.get("Roughness", 0.5)), 0.0, 1.0)
+    if "Specular IOR Level" in inputs:  # Blender 4.x
+        level = max(float(inputs.get("Specular IOR Level", 0.5)), 0.0)
+        tint = _rgb(inputs.get("Specular Tint"), (1.0, 1.0, 1.0))
+        f0 = f0_from_ior(float(inputs.get("IOR", 1.5))) * 2.0 * level
+        dielectric = (f0 * tint[0], f0 * tint[1], f0 * tint[2])
+    else:  # Blender 3.x
+        specular = max(float(inputs.get("Specular", 0.5)), 0.0)
+        tint_amount = inputs.get("Specular Tint", 0.0)
+        if not isinstance(tint_amount, (int, float)):
+            raise ValueError("Specular Tint: expected a float in Blender 3.x's Principled BSDF")
+        f0 = PRINCIPLED_3X_F0_PER_SPECULAR * specular
+        tinted = _mix((1.0, 1.0, 1.0), _tint_colour(base), _clamp(float(tint_amount), 0.0, 1.0))
+        dielectric = (f0 * tinted[0], f0 * tinted[1], f0 * tinted[2])
+    color = _clamp_rgb(_mix(dielectric, base, metallic))
+    return SpecularSpec(color, shininess_from_roughness(roughness))
+
+
+def viewport_specular(desc: Mapping[str, object]) -> SpecularSpec:
+    """A material without nodes: its viewport display values read as a 3.x Principled."""
+    spec_colour = _rgb(desc.get("specular_color"), (1.0, 1.0, 1.0))
+    intensity = max(float(desc.get("specular_intensity", 0.5)), 0.0)
+    base = _clamp_rgb(_rgb(desc.get("diffuse_color"), (0.8, 0.8, 0.8)))
+    metallic = _clamp(float(desc.get("metallic", 0.0)), 0.0, 1.0)
+    f0 = PRINCIPLED_3X_F0_PER_SPECULAR * intensity
+    dielectric = (f0 * spec_colour[0], f0 * spec_colour[1], f0 * spec_colour[2])
+    color = _clamp_rgb(_mix(dielectric, base, metallic))
+    return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.4))))
+
+
+def _combine(a: SpecularSpec, wa: float, b: SpecularSpec, wb: float) -> SpecularSpec:
+    """Weighted sum of two lobes; shininess averaged by each lobe's reflected amount."""
+    color = _clamp_rgb(tuple(a.color[i] * wa + b.color[i] * wb for i in range(3)))
+    ka, kb = a.amount * wa, b.amount * wb
+    if ka + kb <= 0.0:
+        return SpecularSpec(color, 0.0)
+    shininess = (a.shininess * ka + b.shininess * kb) / (ka + kb)
+    return SpecularSpec(color, shininess)
+
+
+_MAX_DEPTH = 32  # node graphs are DAGs, but a hand-made description could loop
+
+
+def evaluate_shader(desc: Optional[Mapping[str, object]], _depth: int = 0) -> SpecularSpec:
+    """The specular spec of a shader description (see the module docstring)."""
+    if desc is None or _depth > _MAX_DEPTH:
+        return NO_SPECULAR
+    kind = desc.get("kind")
+    if kind == "principled":
+        return principled_specular(desc.get("inputs", {}))
+    if kind in ("glossy", "specular", "anisotropic"):
+        color = _clamp_rgb(_rgb(desc.get("color"), (1.0, 1.0, 1.0)))
+        return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.5))))
+    if kind == "glass":
+        f0 = f0_from_ior(float(desc.get("ior", 1.45)))
+        return SpecularSpec((f0, f0, f0), shininess_from_roughness(float(desc.get("roughness", 0.0))))
+    if kind == "viewport":
+        return viewport_specular(desc)
+    if kind == "mix":
+        fac = _clamp(float(desc.get("fac", 0.5)), 0.0, 1.0)
+        a = evaluate_shader(desc.get("a"), _depth + 1)
+        b = evaluate_shader(desc.get("b"), _depth + 1)
+        return _combine(a, 1.0 - fac, b, fac)
+    if kind == "add":
+        a = evaluate_shader(desc.get("a"), _depth + 1)
+        b = evaluate_shader(desc.get("b"), _depth + 1)
+        return _combine(a, 1.0, b, 1.0)
+    if kind == "none":
+        return NO_SPECULAR
+    raise ValueError(f"unknown shader kind {kind!r}")
+
+
+def material_spec(desc: Optional[Mapping[str, object]], hardness: Optional[float] = None) -> SpecularSpec:
+    """The full rule: the shader's spec, with a custom ``hardness`` overriding shininess."""
+    spec = evaluate_shader(desc)
+    if hardness is not None:
+        spec = SpecularSpec(spec.color, shininess_from_hardness(float(hardness)))
+    return spec

@@ -1,0 +1,112 @@
+"""Camera maths on numpy arrays: render size, view matrix, projection checks.
+
+The projection itself comes from Blender (``Object.calc_matrix_camera``); this
+module only checks it, builds the view transform the way Blender's renderers do
+(camera scale removed) and projects points, so tests can compare against
+Blender's independent ``world_to_camera_view``.
+"""
+from __future__ import annotations
+
+from typing import Tuple
+
+import numpy as np
+
+PERSPECTIVE = "perspective"
+ORTHOGRAPHIC = "orthographic"
+
+
+class ProjectionError(ValueError):
+    """A projection Glint cannot use (the message says why)."""
+
+
+def render_size(resolution_x: int, resolution_y: int, percentage: int) -> Tuple[int, int]:
+    """The rendered image size: Blender's ``resolution * percentage / 100`` in integers."""
+    w = int(resolution_x) * int(percentage) // 100
+    h = int(resolution_y) * int(percentage) // 100
+    if w < 1 or h < 1:
+        raise ProjectionError(f"render size {w}x{h}: expected at least 1x1 pixels")
+    return w, h
+
+
+def normalized_camera_matrix(matrix_world) -> np.ndarray:
+    """The camera's world matrix with scale removed (unit axes), as renderers use it.
+
+    Blender's renderers ignore camera scale: a camera object scaled by 2 renders
+    the same image. The view matrix is the inverse of this.
+    """
+    m = np.array(matrix_world, dtype=np.float64).reshape(4, 4).copy()
+    for c in range(3):
+        n = np.linalg.norm(m[:3, c])
+        if not np.isfinite(n) or n == 0.0:
+            raise ProjectionError("camera matrix: an axis has zero or non-finite length")
+        m[:3, c] /= n
+    return m
+
+
+def view_matrix(camera_matrix_world) -> np.ndarray:
+    """World -> view (Blender camera space: -Z forward, +Y up)."""
+    return np.linalg.inv(normalized_camera_matrix(camera_matrix_world))
+
+
+def classify_projection(projection) -> str:
+    """'perspective' or 'orthographic'; raises ProjectionError for anything unusable."""
+    p = np.asarray(projection, dtype=np.float64)
+    if p.shape != (4, 4):
+        raise ProjectionError(f"projection: expected a 4x4 matrix, got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ProjectionError("projection: contains non-finite values")
+    if abs(np.linalg.det(p)) < 1e-300:
+        raise ProjectionError("projection: singular matrix")
+    last = p[3]
+    if np.allclose(last, (0.0, 0.0, -1.0, 0.0)):
+        return PERSPECTIVE
+    if np.allclose(last, (0.0, 0.0, 0.0, 1.0)):
+        return ORTHOGRAPHIC
+    raise ProjectionError(f"projection: last row {tuple(last)} is neither perspective nor orthographic")
+
+
+def transform_points(matrix, points) -> np.ndarray:
+    """Apply a 4x4 affine matrix to [..., 3] points."""
+    m = np.asarray(matrix, dtype=np.float64)
+    p = np.asarray(points, dtype=np.float64)
+    return p @ m[:3, :3].T + m[:3, 3]
+
+
+def normal_matrix(matrix) -> np.ndarray:
+    """The 3x3 that carries normals through ``matrix``: the inverse transpose."""
+    m3 = np.asarray(matrix, dtype=np.float64)[:3, :3]
+    det = np.linalg.det(m3)
+    if not np.isfinite(det) or abs(det) < 1e-300:
+        # A flattened object (scale 0 on an axis) has no inverse: its normals
+        # still point along the collapsed axis, which the cofactor matrix keeps.
+        cof = np.empty((3, 3))
+        for i in range(3):
+            for j in range(3):
+                minor = np.delete(np.delete(m3, i, 0), j, 1)
+                cof[i, j] = (-1) ** (i + j) * np.linalg.det(minor)
+        return cof
+    return np.linalg.inv(m3).T
+
+
+def transform_normals(matrix, normals) -> np.ndarray:
+    """Normals through ``matrix`` (inverse transpose), renormalised; zero stays zero."""
+    n = np.asarray(normals, dtype=np.float64) @ normal_matrix(matrix).T
+    length = np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def project(projection, view_points) -> Tuple[np.ndarray, np.ndarray]:
+    """View-space points -> (uv in [0, 1] across the image, clip w)."""
+    p = np.asarray(projection, dtype=np.float64)
+    v = np.asarray(view_points, dtype=np.float64)
+    clip = v @ p[:3, :3].T + p[:3, 3]
+    w = v @ p[3, :3] + p[3, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        uv = clip[..., :2] / w[..., None] * 0.5 + 0.5
+    return uv, w
+
+
+def pixel_of_uv(uv, width: int, height: int) -> np.ndarray:
+    """(col, row) of the pixel whose square contains uv (row 0 at the bottom)."""
+    uv = np.asarray(uv, dtype=np.float64)
+    return np.stack([np.floor(uv[..., 0] * width), np.floor(uv[..., 1] * height)], axis=-1).astype(np.int64)

@@ -1,0 +1,187 @@
+"""Operators: compute the layers for the current frame (with progress and Esc
+to cancel), cancel a running export, retry loading the native module, and
+rebuild the compositor set-up."""
+from __future__ import annotations
+
+import threading
+
+import bpy
+import numpy as np
+
+from . import compositor, gather, native
+from .frame import settings_dict
+from .logic import compositing, settings as settings_logic
+from .logic.progress import Cancelled, Progress, Timings
+from .state import STATE
+
+
+class GLINT_OT_retry_native(bpy.types.Operator):
+    """Look for Glint's native module again"""
+
+    bl_idname = "glint.retry_native"
+    bl_label = "Retry Loading the Native Module"
+
+    def execute(self, context):
+        native.reset()
+        core = native.load(retry=True)
+        if core is None:
+            self.report({"ERROR"}, f"Glint: {native.error()}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Glint: native module loaded from {native.origin()}")
+        return {"FINISHED"}
+
+
+class GLINT_OT_cancel(bpy.types.Operator):
+    """Stop Glint's export of the frame being rendered (the frame renders without reflections)"""
+
+    bl_idname = "glint.cancel"
+    bl_label = "Cancel Glint"
+
+    def execute(self, context):
+        STATE.cancel.set()
+        self.report({"INFO"}, "Glint: cancelling")
+        return {"FINISHED"}
+
+
+class GLINT_OT_setup_compositor(bpy.types.Operator):
+    """Put Glint's node group back into this scene's compositor"""
+
+    bl_idname = "glint.setup_compositor"
+    bl_label = "Set Up Compositor"
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and context.scene.glint.enabled
+
+    def execute(self, context):
+        warning = compositor.ensure(context.scene)
+        if warning:
+            self.report({"WARNING"}, f"Glint: {warning}")
+        return {"FINISHED"}
+
+
+class GLINT_OT_compute_layers(bpy.types.Operator):
+    """Compute Glint's layers (position, normal, specular, reflected uv, visibility)
+    for the current frame and the viewport's evaluated scene, and show the debug
+    view's layer in an Image Editor. Esc cancels"""
+
+    bl_idname = "glint.compute_layers"
+    bl_label = "Compute Layers"
+
+    _timer = None
+    _thread = None
+    _result = None
+    _cancel = None
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and context.scene.camera is not None
+
+    def invoke(self, context, event):
+        core = native.load()
+        if core is None:
+            self.report({"ERROR"}, f"Glint: {native.error()}")
+            return {"CANCELLED"}
+        scene = context.scene
+        depsgraph = context.evaluated_depsgraph_get()  # not a final render: the viewport's scene
+        wm = context.window_manager
+        self._cancel = threading.Event()
+        wm.progress_begin(0, 100)
+
+        def report(fraction, message):
+            wm.progress_update(int(fraction * 50))
+
+        timings = Timings()
+        try:
+            with timings.measure("export"):
+                exp = gather.export_scene(depsgraph, Progress(0, report=report, should_stop=self._cancel.is_set,
+                                                              interval=0.1))
+        except (gather.SkipFrame, Cancelled, ValueError) as exc:
+            wm.progress_end()
+            self.report({"WARNING"}, f"Glint: {exc}")
+            return {"CANCELLED"}
+        values = settings_dict(scene.glint)
+        backend = settings_logic.backend_name(values["backend"])
+        kwargs = settings_logic.trace_kwargs(values)
+        self._result = {"timings": timings}
+
+        def work():
+            # Native stages only: they release the GIL, Blender's UI stays live.
+            try:
+                cam = exp.camera
+                t = exp.triangles
+                extra = {}
+                if t.uvs is not None and exp.normal_maps:
+                    extra = dict(uvs=t.uvs, tangents=t.tangents, material_normal_map=exp.material_normal_map,
+                                 normal_maps=exp.normal_maps)
+                proj = cam.projection.astype(np.float32)
+                with timings.measure("rasterize"):
+                    g = core.rasterize(t.positions, t.normals, t.material_index, exp.materials, proj,
+                                       cam.width, cam.height, backend=backend, **extra)
+                if self._cancel.is_set():
+                    return
+                n = compositing.trace_normals(g["normal"], g["position"], g["specular"])
+                with timings.measure("trace"):
+                    uv = core.trace(g["position"], n, proj, backend=backend, **kwargs)
+                self._result.update(g, uv=uv, projection=cam.projection)
+            except Exception as exc:  # reported by the modal loop
+                self._result["error"] = f"{type(exc).__name__}: {exc}"
+
+        self._thread = threading.Thread(target=work, name="glint-layers", daemon=True)
+        self._thread.start()
+        self._timer = wm.event_timer_add(0.05, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _finish(self, context):
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._cancel.set()
+            self._finish(context)
+            self.report({"INFO"}, "Glint: cancelled")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        if self._thread.is_alive():
+            context.window_manager.progress_update(75)
+            return {"PASS_THROUGH"}
+        self._finish(context)
+        r = self._result
+        if "error" in r:
+            self.report({"ERROR"}, f"Glint: {r['error']}")
+            return {"CANCELLED"}
+        if "uv" not in r:
+            return {"CANCELLED"}
+        view = context.scene.glint.debug_view
+        if view not in compositing.GBUFFER_DEBUG_VIEWS:
+            view = "VISIBILITY"
+        img = compositing.debug_image(view, r["position"], r["normal"], r["specular"], r["uv"])
+        compositor.fill_images({compositing.IMAGE_DEBUG: img})
+        with STATE.lock:
+            STATE.arrays = {k: r[k] for k in ("position", "normal", "specular", "uv", "projection")}
+        for area in context.screen.areas:
+            if area.type == "IMAGE_EDITOR":
+                area.spaces.active.image = bpy.data.images[compositing.IMAGE_DEBUG]
+                break
+        self.report({"INFO"}, f"Glint: layers computed ({r['timings'].summary()}); "
+                              f"'{compositing.IMAGE_DEBUG}' shows {view.lower()}")
+        return {"FINISHED"}
+
+
+CLASSES = (GLINT_OT_retry_native, GLINT_OT_cancel, GLINT_OT_setup_compositor, GLINT_OT_compute_layers)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

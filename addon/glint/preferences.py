@@ -1,0 +1,55 @@
+"""Add-on preferences: where the native module came from, or why it is missing."""
+from __future__ import annotations
+
+import bpy
+
+from . import native
+
+
+class GLINT_AddonPreferences(bpy.types.AddonPreferences):
+    bl_idname = __package__
+
+    def draw(self, context):
+        layout = self.layout
+        core = native.load()
+        if core is None:
+            box = layout.box()
+            box.alert = True
+            box.label(text="Glint's native module is missing: renders get no reflections.", icon="ERROR")
+            for line in _wrap(native.error() or "", 90):
+                box.label(text=line)
+        else:
+            layout.label(text=f"Native module {getattr(core, '__version__', '?')} loaded from:", icon="CHECKMARK")
+            layout.label(text=native.origin() or "?")
+            try:
+                gl = "compiled in" if core.gl_compiled_in() else "not compiled in"
+            except AttributeError:
+                gl = "unknown"
+            layout.label(text=f"OpenGL backend: {gl}")
+        layout.operator("glint.retry_native", icon="FILE_REFRESH")
+
+
+def _wrap(text: str, width: int):
+    words, line, lines = text.split(), "", []
+    for w in words:
+        if len(line) + len(w) + 1 > width:
+            lines.append(line)
+            line = w
+        else:
+            line = f"{line} {w}".strip()
+    if line:
+        lines.append(line)
+    return lines
+
+
+CLASSES = (GLINT_AddonPreferences,)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,119 @@
+"""Render Properties > Glint: the switch, quality, backend, debug views, status."""
+from __future__ import annotations
+
+import bpy
+
+from . import native
+from .state import STATE
+
+
+class GLINT_PT_render(bpy.types.Panel):
+    bl_label = "Glint"
+    bl_idname = "GLINT_PT_render"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.glint, "enabled", text="")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        glint = context.scene.glint
+        layout.active = glint.enabled
+        if native.load() is None:
+            box = layout.box()
+            box.alert = True
+            box.label(text="Native module missing: no reflections", icon="ERROR")
+            box.operator("glint.retry_native", icon="FILE_REFRESH")
+        layout.prop(glint, "preset")
+        if glint.enabled and not context.scene.render.use_compositing:
+            layout.label(text="Compositing is off in Post Processing", icon="ERROR")
+        last = STATE.last
+        if last is not None:
+            icon = {"ok": "CHECKMARK", "skipped": "INFO"}.get(last.status, "ERROR")
+            text = f"Frame {last.frame}: {last.status}"
+            if last.backend:
+                text += f" ({last.backend})"
+            layout.label(text=text, icon=icon)
+            if last.message:
+                layout.label(text=last.message)
+            if last.timings_ms:
+                layout.label(text=", ".join(f"{k} {v:.0f} ms" for k, v in last.timings_ms.items()))
+        if STATE.busy:
+            layout.operator("glint.cancel", icon="CANCEL")
+
+
+class GLINT_PT_parameters(bpy.types.Panel):
+    bl_label = "Parameters"
+    bl_parent_id = "GLINT_PT_render"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        glint = context.scene.glint
+        layout.active = glint.enabled
+        col = layout.column(align=True)
+        col.prop(glint, "max_distance")
+        col.prop(glint, "thickness")
+        col = layout.column(align=True)
+        col.prop(glint, "resolution")
+        col.prop(glint, "steps")
+        layout.prop(glint, "march")
+        layout.prop(glint, "blur_size")
+
+
+class GLINT_PT_backend(bpy.types.Panel):
+    bl_label = "Backend"
+    bl_parent_id = "GLINT_PT_render"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        glint = context.scene.glint
+        layout.prop(glint, "backend")
+        used = STATE.last.backend if STATE.last is not None and STATE.last.backend else "not rendered yet"
+        layout.label(text=f"Last used: {used}")
+        layout.prop_search(glint, "view_layer", context.scene, "view_layers")
+
+
+class GLINT_PT_debug(bpy.types.Panel):
+    bl_label = "Debug"
+    bl_parent_id = "GLINT_PT_render"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        glint = context.scene.glint
+        layout.prop(glint, "debug_view")
+        layout.prop(glint, "write_layers_exr")
+        row = layout.row()
+        row.operator("glint.compute_layers", icon="RENDERLAYERS")
+        row.operator("glint.setup_compositor", icon="NODETREE")
+
+
+CLASSES = (GLINT_PT_render, GLINT_PT_parameters, GLINT_PT_backend, GLINT_PT_debug)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

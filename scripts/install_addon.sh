@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# One-line install of the add-on from this checkout:
+#   scripts/install_addon.sh
+# Symlinks addon/glint into Blender's user add-on folder (so edits in the
+# checkout are live) and enables it in the saved preferences. The native module
+# is then found in <checkout>/build/python (or $GLINT_CORE_PATH).
+#   BLENDER               Blender to use (default: blender)
+#   BLENDER_USER_SCRIPTS  user scripts folder (default: ~/.config/blender/<version>/scripts)
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+blender=${BLENDER:-blender}
+command -v "$blender" >/dev/null || { echo "install_addon: $blender not found" >&2; exit 1; }
+
+version=$("$blender" --version 2>/dev/null | sed -n 's/^Blender \([0-9]*\.[0-9]*\).*/\1/p' | head -n1)
+[[ -n $version ]] || { echo "install_addon: cannot tell the Blender version" >&2; exit 1; }
+scripts=${BLENDER_USER_SCRIPTS:-$HOME/.config/blender/$version/scripts}
+addons="$scripts/addons"
+mkdir -p "$addons"
+target="$addons/glint"
+if [[ -e $target && ! -L $target ]]; then
+  echo "install_addon: $target exists and is not a symlink; remove it first" >&2
+  exit 1
+fi
+ln -sfn "$root/addon/glint" "$target"
+echo "install_addon: $target -> $root/addon/glint"
+
+# Enable it and save the preferences (the user's own preferences, kept as they are).
+"$blender" -b --python-expr "
+import bpy, sys
+bpy.ops.preferences.addon_enable(module='glint')
+if 'glint' not in bpy.context.preferences.addons:
+    sys.exit('install_addon: enabling the add-on failed')
+bpy.context.preferences.is_dirty = True
+bpy.ops.wm.save_userpref()
+print('install_addon: enabled in the saved preferences')
+" 2>&1 | grep -E '^install_addon|Error|rror:' || true
+[[ -d $root/build/python ]] || echo "install_addon: note: no $root/build/python yet; build with scripts/setup.sh (or set GLINT_CORE_PATH)"

@@ -1,0 +1,162 @@
+"""The material -> specular buffer rule, against hand-computed values."""
+import pytest
+
+from glint_addon_helpers import load_logic
+
+m = load_logic("materials")
+
+
+def test_hardness_511_maps_through_127_75_to_one():
+    assert m.shininess_from_hardness(511) == 127.75
+    assert m.alpha_from_shininess(127.75) == 1.0
+    assert m.alpha_from_shininess(m.shininess_from_hardness(511)) == 1.0
+
+
+@pytest.mark.parametrize("hardness,shininess", [(1, 0.25), (50, 12.5), (255.5, 63.875), (0, 0.25),
+                                                (-5, 0.25), (1000, 127.75), (float("nan"), 0.25)])
+def test_hardness_is_clamped_to_blender_internal_range(hardness, shininess):
+    assert m.shininess_from_hardness(hardness) == pytest.approx(shininess)
+
+
+def test_alpha_of_hardness_1_is_1_over_511():
+    assert m.alpha_from_shininess(m.shininess_from_hardness(1)) == pytest.approx(1 / 511)
+
+
+@pytest.mark.parametrize("roughness,hardness", [
+    (0.0, 511.0),
+    (0.2, 511.0),  # alpha 0.04: 2 / 0.0016 - 2 = 1248 -> capped
+    (0.3, 2 / 0.09 ** 2 - 2),  # 244.91...
+    (0.5, 30.0),  # alpha 0.25: 2 / 0.0625 - 2
+    (0.8, 2 / 0.64 ** 2 - 2),  # 2.8828...
+    (1.0, 1.0),  # 0, clamped to the minimum
+])
+def test_hardness_from_roughness_is_walters_blinn_phong_equivalence(roughness, hardness):
+    assert m.hardness_from_roughness(roughness) == pytest.approx(hardness, rel=1e-12)
+
+
+def test_hardness_from_roughness_is_monotonic():
+    values = [m.hardness_from_roughness(r / 100) for r in range(101)]
+    assert all(a >= b for a, b in zip(values, values[1:]))
+
+
+def principled_34(**kw):
+    inputs = {"Base Color": (0.8, 0.8, 0.8, 1.0), "Metallic": 0.0, "Specular": 0.5, "Specular Tint": 0.0,
+              "Roughness": 0.5, "IOR": 1.45}
+    inputs.update(kw)
+    return inputs
+
+
+def principled_4x(**kw):
+    inputs = {"Base Color": (0.8, 0.8, 0.8, 1.0), "Metallic": 0.0, "Roughness": 0.5, "IOR": 1.5,
+              "Specular IOR Level": 0.5, "Specular Tint": (1.0, 1.0, 1.0, 1.0)}
+    inputs.update(kw)
+    return inputs
+
+
+def test_principled_34_default_is_f0_004():
+    s = m.principled_specular(principled_34())
+    assert s.color == pytest.approx((0.04, 0.04, 0.04))
+    assert s.shininess == pytest.approx(30.0 / 4)
+
+
+def test_principled_34_metal_reflects_base_colour():
+    s = m.principled_specular(principled_34(**{"Base Color": (0.9, 0.5, 0.2, 1.0), "Metallic": 1.0,
+                                               "Roughness": 0.0}))
+    assert s.color == pytest.approx((0.9, 0.5, 0.2))
+    assert s.shininess == 127.75
+    assert s.alpha == 1.0
+
+
+def test_principled_34_half_metal_mixes():
+    s = m.principled_specular(principled_34(**{"Base Color": (1.0, 0.0, 0.0, 1.0), "Metallic": 0.5,
+                                               "Specular": 1.0}))
+    # dielectric F0 0.08 (Specular 1), metal F0 = base, half way
+    assert s.color == pytest.approx((0.54, 0.04, 0.04))
+
+
+def test_principled_34_specular_tint_uses_unit_luminance_base():
+    s = m.principled_specular(principled_34(**{"Base Color": (0.8, 0.2, 0.2, 1.0), "Specular Tint": 1.0}))
+    lum = 0.2126 * 0.8 + 0.7152 * 0.2 + 0.0722 * 0.2
+    assert s.color == pytest.approx((0.04 * 0.8 / lum, 0.04 * 0.2 / lum, 0.04 * 0.2 / lum))
+
+
+def test_principled_34_specular_zero_is_not_reflective():
+    s = m.principled_specular(principled_34(Specular=0.0))
+    assert s.amount == 0.0
+
+
+def test_principled_4x_default_matches_34_default():
+    s = m.principled_specular(principled_4x())
+    assert s.color == pytest.approx((0.04, 0.04, 0.04))  # ((1.5 - 1) / 2.5)^2 * 2 * 0.5
+    assert s.shininess == pytest.approx(7.5)
+
+
+def test_principled_4x_ior_and_level_and_tint():
+    s = m.principled_specular(principled_4x(IOR=1.33, **{"Specular IOR Level": 1.0,
+                                                         "Specular Tint": (1.0, 0.5, 0.0, 1.0)}))
+    f0 = (0.33 / 2.33) ** 2 * 2.0
+    assert s.color == pytest.approx((f0, f0 * 0.5, 0.0))
+
+
+def test_principled_4x_metal():
+    s = m.principled_specular(principled_4x(Metallic=1.0, Roughness=0.0,
+                                            **{"Base Color": (0.95, 0.64, 0.54, 1.0)}))
+    assert s.color == pytest.approx((0.95, 0.64, 0.54))
+    assert s.alpha == 1.0
+
+
+def test_principled_34_rejects_colour_tint():
+    with pytest.raises(ValueError, match="Specular Tint"):
+        m.principled_specular(principled_34(**{"Specular Tint": (1.0, 1.0, 1.0, 1.0)}))
+
+
+def test_colour_is_clamped_to_unit_range():
+    s = m.principled_specular(principled_34(Metallic=1.0, **{"Base Color": (5.0, -1.0, 0.5, 1.0)}))
+    assert s.color == pytest.approx((1.0, 0.0, 0.5))
+
+
+def test_custom_hardness_overrides_shininess_not_colour():
+    desc = {"kind": "principled", "inputs": principled_34(Roughness=1.0)}
+    s = m.material_spec(desc, hardness=511)
+    assert s.shininess == 127.75 and s.alpha == 1.0
+    assert s.color == pytest.approx((0.04, 0.04, 0.04))
+    assert m.material_spec(desc, hardness=255).alpha == pytest.approx(255 / 511)
+
+
+def test_viewport_values_without_nodes():
+    s = m.material_spec({"kind": "viewport", "specular_color": (1.0, 1.0, 1.0), "specular_intensity": 0.5,
+                         "roughness": 0.4, "metallic": 0.0, "diffuse_color": (0.8, 0.8, 0.8, 1.0)})
+    assert s.color == pytest.approx((0.04, 0.04, 0.04))
+    assert s.shininess == pytest.approx((2 / 0.16 ** 2 - 2) / 4)
+    metal = m.material_spec({"kind": "viewport", "specular_color": (1, 1, 1), "specular_intensity": 0.5,
+                             "roughness": 0.0, "metallic": 1.0, "diffuse_color": (0.2, 0.4, 0.6, 1.0)})
+    assert metal.color == pytest.approx((0.2, 0.4, 0.6))
+
+
+def test_other_shaders():
+    assert m.evaluate_shader({"kind": "none"}).amount == 0.0
+    assert m.evaluate_shader(None).amount == 0.0
+    g = m.evaluate_shader({"kind": "glossy", "color": (1.0, 0.5, 0.25, 1.0), "roughness": 0.0})
+    assert g.color == pytest.approx((1.0, 0.5, 0.25)) and g.alpha == 1.0
+    glass = m.evaluate_shader({"kind": "glass", "ior": 1.5, "roughness": 0.0})
+    assert glass.color == pytest.approx((0.04, 0.04, 0.04))
+    with pytest.raises(ValueError):
+        m.evaluate_shader({"kind": "mystery"})
+
+
+def test_mix_and_add_shaders():
+    mirror = {"kind": "glossy", "color": (1.0, 1.0, 1.0), "roughness": 0.0}
+    rough = {"kind": "glossy", "color": (1.0, 1.0, 1.0), "roughness": 1.0}
+    mix = m.evaluate_shader({"kind": "mix", "fac": 0.25, "a": mirror, "b": {"kind": "none"}})
+    assert mix.color == pytest.approx((0.75, 0.75, 0.75))
+    assert mix.shininess == 127.75  # only the mirror reflects
+    half = m.evaluate_shader({"kind": "mix", "fac": 0.5, "a": mirror, "b": rough})
+    assert half.shininess == pytest.approx((127.75 + 0.25) / 2)  # amount-weighted
+    add = m.evaluate_shader({"kind": "add", "a": mirror, "b": mirror})
+    assert add.color == pytest.approx((1.0, 1.0, 1.0))  # clamped
+
+
+def test_row_layout_is_rgb_then_shininess():
+    s = m.SpecularSpec((0.1, 0.2, 0.3), 12.0)
+    assert s.row() == (0.1, 0.2, 0.3, 12.0)
+    assert s.amount == pytest.approx(0.2)

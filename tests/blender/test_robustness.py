@@ -1,0 +1,184 @@
+"""What must not break a render: a panoramic camera, a core error, an OpenGL
+context that cannot be made; and the compositor set-up coming and going cleanly."""
+import json
+import os
+
+import numpy as np
+import pytest
+
+from glint_blender_helpers import PANELS, load_dump, read_exr
+
+pytestmark = pytest.mark.blender
+
+
+def test_panoramic_camera_is_reported_and_skipped(blender, samples, tmp_path):
+    out = str(tmp_path / "pano")
+    code = "import bpy; c = bpy.context.scene.camera.data; c.type = 'PANO'; c.cycles.panorama_type = 'EQUIRECTANGULAR'"
+    log = blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1, "python": code})
+    assert "is panoramic" in log and "Glint: frame 1: nothing to reflect" in log
+    assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
+
+
+def test_core_error_is_reported_and_the_frame_still_renders(blender, samples, tmp_path):
+    out = str(tmp_path / "huge")
+    # Wider than the core accepts (32768 pixels a side): rasterize raises ValueError.
+    log = blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
+                                                        "size": [33000, 2], "glint": {"backend": "CPU"}})
+    assert "Glint: frame 1: rendered WITHOUT reflections: ValueError" in log
+    assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
+
+
+@pytest.fixture()
+def no_egl(blender):
+    """An environment where no EGL driver can be found (glvnd finds no vendor)."""
+    env = dict(blender.env)
+    env["__EGL_VENDOR_LIBRARY_FILENAMES"] = "/nonexistent/egl_vendor.json"
+    env["__EGL_VENDOR_LIBRARY_DIRS"] = "/nonexistent"
+    saved = blender.env
+    blender.env = env
+    yield blender
+    blender.env = saved
+
+
+def test_gl_that_cannot_run_is_reported(no_egl, samples, tmp_path):
+    out = str(tmp_path / "gl")
+    log = no_egl.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
+                                                       "glint": {"backend": "GL"}})
+    assert "Glint: frame 1: rendered WITHOUT reflections: backend unavailable" in log, log[-2000:]
+    assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
+
+
+def test_auto_falls_back_to_the_cpu(no_egl, samples, tmp_path):
+    out = str(tmp_path / "auto")
+    log = no_egl.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1, "dump": True,
+                                                       "glint": {"backend": "AUTO"}})
+    assert "Glint: frame 1: reflections composited" in log and "backend cpu" in log, log[-2000:]
+    assert str(load_dump(out)["backend"]) == "cpu"
+
+
+SETUP_CHECK = r"""
+import bpy, json
+from glint.logic import compositing as cg
+s = bpy.context.scene
+res = {}
+def links(tree):
+    return sorted(f"{l.from_node.name}:{l.from_socket.name}->{l.to_node.name}:{l.to_socket.name}" for l in tree.links)
+# A scene without compositing nodes: Glint switches them on and off again.
+s.use_nodes = False
+s.glint.enabled = True
+res['plain_on'] = {'use_nodes': s.use_nodes, 'links': links(s.node_tree)}
+s.glint.enabled = False
+res['plain_off'] = {'use_nodes': s.use_nodes, 'group': cg.GROUP_NAME in bpy.data.node_groups,
+                    'images': [n for n in cg.ALL_IMAGES if n in bpy.data.images]}
+# A user tree: Render Layers -> Glare -> Composite, and a Viewer on the render.
+s.use_nodes = True
+t = s.node_tree
+rl = t.nodes['Render Layers']; comp = t.nodes['Composite']
+glare = t.nodes.new('CompositorNodeGlare'); glare.name = 'User Glare'
+viewer = t.nodes.new('CompositorNodeViewer'); viewer.name = 'User Viewer'
+for l in list(t.links): t.links.remove(l)
+t.links.new(rl.outputs['Image'], glare.inputs['Image'])
+t.links.new(glare.outputs['Image'], comp.inputs['Image'])
+t.links.new(rl.outputs['Image'], viewer.inputs['Image'])
+res['user_before'] = links(t)
+s.glint.enabled = True
+s.glint.write_layers_exr = True
+res['user_on'] = links(t)
+res['exr_node'] = cg.EXR_NODE_NAME in t.nodes
+s.glint.blur_size = 5
+s.glint.debug_view = 'REFLECTION'
+g = bpy.data.node_groups[cg.GROUP_NAME]
+res['blur'] = [g.nodes['blur'].size_x, g.nodes['blur'].size_y]
+res['switch'] = [g.nodes['show_reflection'].check, g.nodes['show_debug'].check]
+s.glint.preset = 'HIGH'
+res['preset'] = [s.glint.resolution, s.glint.steps, s.glint.blur_size]
+s.glint.steps = 7
+res['preset_after_edit'] = s.glint.preset
+s.glint.enabled = True  # again: nothing may be duplicated
+res['nodes_on'] = sorted(n.name for n in t.nodes)
+s.glint.enabled = False
+res['user_off'] = links(t)
+res['nodes_off'] = sorted(n.name for n in t.nodes)
+res['use_nodes_off'] = s.use_nodes
+res['group_off'] = cg.GROUP_NAME in bpy.data.node_groups
+print('SETUP' + json.dumps(res))
+"""
+
+
+def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
+    log = blender.run(["--addons", "glint", "--python-expr", SETUP_CHECK])
+    res = json.loads(next(line[5:] for line in log.splitlines() if line.startswith("SETUP")))
+    assert res["plain_on"]["use_nodes"] is True
+    assert res["plain_on"]["links"] == ["Glint:Image->Composite:Image", "Render Layers:Image->Glint:Image"]
+    assert res["plain_off"] == {"use_nodes": False, "group": False, "images": []}
+    assert res["user_on"] == sorted(["Render Layers:Image->Glint:Image", "Glint:Image->User Glare:Image",
+                                     "User Glare:Image->Composite:Image", "Glint:Image->User Viewer:Image"] +
+                                    [f"Glint:{name}->Glint EXR:{name}" for name in
+                                     ("Image", "Base", "Reflection", "Position", "Normal", "Specular", "UV",
+                                      "Visibility")])
+    assert res["exr_node"] is True
+    assert res["blur"] == [5, 5] and res["switch"] == [True, False]
+    assert res["preset"] == [pytest.approx(0.6), 20, 8] and res["preset_after_edit"] == "CUSTOM"
+    assert res["nodes_on"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer", "Glint",
+                                      "Glint EXR"])
+    assert res["user_off"] == res["user_before"]
+    assert res["nodes_off"] == ["Composite", "Render Layers", "User Glare", "User Viewer"]
+    assert res["use_nodes_off"] is True and res["group_off"] is False
+
+
+@pytest.mark.parametrize("view", ["VISIBILITY", "REFLECTION"])
+def test_debug_view_renders_the_layer(blender, samples, mirror_off, tmp_path, view):
+    out = str(tmp_path / view)
+    blender.render(samples["mirror_floor"], out, {"dump": True, "glint": {"debug_view": view, "backend": "CPU",
+                                                                          "write_layers_exr": True}})
+    img = read_exr(os.path.join(out, "frame_0001.exr"))
+    dump = load_dump(out)
+    if view == "VISIBILITY":
+        assert np.allclose(img[..., 0], dump["uv"][..., 2]) and np.allclose(img[..., 1], dump["uv"][..., 2])
+    else:
+        layers = read_exr(os.path.join(out, "frame_glint_0001.exr"), layer=None)
+        assert np.array_equal(img, layers["Reflection"])
+        hit = dump["uv"][..., 2] > 0
+        assert img[hit, 3].mean() > 0.3 and np.all(img[~hit & (img[..., 3] == 0), :3] == 0)
+
+
+def test_cancelling_the_export_renders_the_frame_without_reflections(blender, samples, mirror_off, tmp_path):
+    out = str(tmp_path / "cancel")
+    # What GLINT_OT_cancel does, at the moment the render evaluates the frame.
+    code = """
+import bpy, glint.state as st
+def stop(scene, *args):
+    st.STATE.cancel.set()
+bpy.app.handlers.frame_change_pre.append(stop)
+"""
+    log = blender.render(samples["mirror_floor"], out, {"python": code})
+    assert "Glint: frame 1: rendered WITHOUT reflections: Glint export cancelled at" in log
+    img = read_exr(os.path.join(out, "frame_0001.exr"))
+    base = read_exr(os.path.join(mirror_off[0], "frame_0001.exr"))
+    assert np.abs(img - base).max() <= 1e-6
+
+
+def test_add_on_disables_and_enables_again(blender):
+    log = blender.run(["--python-expr", """
+import addon_utils, bpy
+for _ in range(2):
+    addon_utils.enable('glint', default_set=True, handle_error=None)
+    assert hasattr(bpy.types.Scene, 'glint') and hasattr(bpy.types, 'GLINT_PT_render')
+    assert any(h.__name__ == 'on_frame_change_post' for h in bpy.app.handlers.frame_change_post)
+    bpy.context.scene.glint.enabled = True
+    bpy.context.scene.glint.enabled = False
+    addon_utils.disable('glint', default_set=True, handle_error=None)
+    assert not hasattr(bpy.types.Scene, 'glint')
+    assert not any(h.__name__.startswith('on_') and h.__module__.startswith('glint')
+                   for h in bpy.app.handlers.frame_change_post)
+print('CYCLE OK')
+"""])
+    assert "CYCLE OK" in log and "Traceback" not in log, log[-2000:]
+
+
+def test_panels_draw_every_setting(blender):
+    log = blender.run(["--addons", "glint", "--python-expr", PANELS])
+    line = next(l for l in log.splitlines() if l.startswith("PANELS"))
+    for name in ("enabled", "preset", "max_distance", "resolution", "steps", "thickness", "march", "blur_size",
+                 "backend", "view_layer", "debug_view", "write_layers_exr", "glint.compute_layers"):
+        assert f"'{name}'" in line, (name, line)
