@@ -176,12 +176,4 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
 
 CLASSES = (GLINT_OT_retry_native, GLINT_OT_cancel, GLINT_OT_setup_compositor, GLINT_OT_compute_layers)
 
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

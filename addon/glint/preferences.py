@@ -44,12 +44,4 @@ def _wrap(text: str, width: int):
 
 CLASSES = (GLINT_AddonPreferences,)
 
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

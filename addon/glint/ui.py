@@ -46,13 +46,17 @@ class GLINT_PT_render(bpy.types.Panel):
             layout.operator("glint.cancel", icon="CANCEL")
 
 
-class GLINT_PT_parameters(bpy.types.Panel):
-    bl_label = "Parameters"
+class _GlintSubPanel:
+    """Where every Glint sub-panel sits: under the Glint panel, closed at first."""
     bl_parent_id = "GLINT_PT_render"
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "render"
     bl_options = {"DEFAULT_CLOSED"}
+
+
+class GLINT_PT_parameters(_GlintSubPanel, bpy.types.Panel):
+    bl_label = "Parameters"
 
     def draw(self, context):
         layout = self.layout
@@ -69,13 +73,8 @@ class GLINT_PT_parameters(bpy.types.Panel):
         layout.prop(glint, "blur_size")
 
 
-class GLINT_PT_backend(bpy.types.Panel):
+class GLINT_PT_backend(_GlintSubPanel, bpy.types.Panel):
     bl_label = "Backend"
-    bl_parent_id = "GLINT_PT_render"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "render"
-    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
         layout = self.layout
@@ -87,13 +86,8 @@ class GLINT_PT_backend(bpy.types.Panel):
         layout.prop_search(glint, "view_layer", context.scene, "view_layers")
 
 
-class GLINT_PT_debug(bpy.types.Panel):
+class GLINT_PT_debug(_GlintSubPanel, bpy.types.Panel):
     bl_label = "Debug"
-    bl_parent_id = "GLINT_PT_render"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "render"
-    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
         layout = self.layout
@@ -108,12 +102,4 @@ class GLINT_PT_debug(bpy.types.Panel):
 
 CLASSES = (GLINT_PT_render, GLINT_PT_parameters, GLINT_PT_backend, GLINT_PT_debug)
 
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)
