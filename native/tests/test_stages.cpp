@@ -43,6 +43,41 @@ TEST(BoxBlur, MatchesTheBrute2DBoxWithClampToEdge) {
   }
 }
 
+TEST(BoxBlur, FractionalSeparationInterpolatesEachTap) {
+  // Taps at x + i * 1.5 fall between texels: each is the linear blend of its
+  // two neighbours (clamped to the edge), in both axes.
+  const int w = 19, h = 13, size = 2;
+  const float sep = 1.5f;
+  Image src = noise(w, h, 11);
+  auto lerp_tap = [&](double px, double py, int c) {
+    auto axis = [](double p, int n, int& i0, int& i1, double& a) {
+      const double f = std::floor(p);
+      a = p - f;
+      i0 = std::min(std::max(int(f), 0), n - 1);
+      i1 = std::min(std::max(int(f) + 1, 0), n - 1);
+    };
+    int x0, x1, y0, y1;
+    double ax, ay;
+    axis(px, w, x0, x1, ax);
+    axis(py, h, y0, y1, ay);
+    const double bottom = src.px(x0, y0)[c] * (1 - ax) + src.px(x1, y0)[c] * ax;
+    const double top = src.px(x0, y1)[c] * (1 - ax) + src.px(x1, y1)[c] * ax;
+    return bottom * (1 - ay) + top * ay;
+  };
+  BlurOptions o;
+  o.size = size;
+  o.separation = sep;
+  Image out = make_cpu_backend(2)->box_blur(src, o, nullptr);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 4; ++c) {
+        double acc = 0;
+        for (int j = -size; j <= size; ++j)
+          for (int i = -size; i <= size; ++i) acc += lerp_tap(x + i * sep, y + j * sep, c);
+        ASSERT_NEAR(out.px(x, y)[c], acc / ((2 * size + 1) * (2 * size + 1)), 1e-5) << x << "," << y;
+      }
+}
+
 TEST(BoxBlur, RegionLeavesTheRestUntouched) {
   Image src = noise(20, 20, 3);
   auto cpu = make_cpu_backend(1);

@@ -61,6 +61,48 @@ inline float tap_1d(const float* line, ptrdiff_t stride, int n, float p, int c) 
   return a == 0.0f ? v0 : v0 * (1.0f - a) + v1 * a;
 }
 
+// Box sums along one axis of 4-channel texels `stride` floats apart:
+// sum over i = -size..size of tap(x + i * sep), for x in [begin, end), handed
+// to emit(x, sum). Taps clamp to [0, n). With a whole-pixel separation k the
+// window slides: going from x - k to x drops the tap at x - k - size * k and
+// adds the one at x + size * k, so each residue class of x mod k keeps a
+// running sum (in double, so sliding adds no drift) and the cost per texel no
+// longer grows with the box. Other separations interpolate each tap.
+template <class Emit>
+void box_sums_1d(const float* line, ptrdiff_t stride, int n, int size, float sep, int begin, int end,
+                 Emit&& emit) {
+  float sum[4];
+  if (sep != std::floor(sep)) {
+    for (int x = begin; x < end; ++x) {
+      for (int c = 0; c < 4; ++c) sum[c] = 0.0f;
+      for (int i = -size; i <= size; ++i) {
+        const float p = static_cast<float>(x) + static_cast<float>(i) * sep;
+        for (int c = 0; c < 4; ++c) sum[c] += tap_1d(line, stride, n, p, c);
+      }
+      emit(x, sum);
+    }
+    return;
+  }
+  const long k = static_cast<long>(sep);
+  auto at = [&](long i) { return line + std::clamp(i, 0L, static_cast<long>(n) - 1) * stride; };
+  for (int first = begin; first < std::min<long>(end, begin + k); ++first) {
+    double acc[4] = {0, 0, 0, 0};
+    for (long i = -size; i <= size; ++i) {
+      const float* t = at(first + i * k);
+      for (int c = 0; c < 4; ++c) acc[c] += t[c];
+    }
+    for (long x = first;;) {
+      for (int c = 0; c < 4; ++c) sum[c] = static_cast<float>(acc[c]);
+      emit(static_cast<int>(x), sum);
+      x += k;
+      if (x >= end) break;
+      const float* drop = at(x - k - size * k);
+      const float* add = at(x + size * k);
+      for (int c = 0; c < 4; ++c) acc[c] += static_cast<double>(add[c]) - drop[c];
+    }
+  }
+}
+
 class CpuBackend final : public Backend {
  public:
   explicit CpuBackend(int threads) : threads_(threads) {}
@@ -73,7 +115,12 @@ class CpuBackend final : public Backend {
     validate(opt);
     validate_projection(in.projection);
     Image out(in.position.width, in.position.height);
-    const cpu::MarchSetup setup = cpu::make_setup(in.position, in.normal, in.projection, opt);
+    std::vector<float> view_distance(in.position.pixel_count());
+    cpu::parallel_rows(0, in.position.height, threads_, [&](int y) {
+      cpu::fill_view_distance(in.position, y, view_distance.data() + static_cast<size_t>(y) * in.position.width);
+    });
+    const cpu::MarchSetup setup =
+        cpu::make_setup(in.position, in.normal, in.projection, opt, view_distance.data());
     const bool linear = opt.march == March::Linear;
     const Image* spec = in.specular;
     cpu::parallel_rows(0, out.height, threads_, [&](int y) {
@@ -129,33 +176,27 @@ class CpuBackend final : public Backend {
     const int reach = static_cast<int>(std::ceil(size * sep)) + 1;
     const int hy0 = std::max(0, y0 - reach), hy1 = std::min(src.height, y1 + reach);
     const int w = x1 - x0;
+    const ptrdiff_t hstride = static_cast<ptrdiff_t>(w) * 4;
     std::vector<float> horiz(static_cast<size_t>(hy1 - hy0) * w * 4);
     cpu::parallel_rows(hy0, hy1, threads_, [&](int y) {
-      const float* line = src.px(0, y);
-      float* dst = horiz.data() + static_cast<size_t>(y - hy0) * w * 4;
-      for (int x = x0; x < x1; ++x) {
-        float acc[4] = {0, 0, 0, 0};
-        for (int i = -size; i <= size; ++i) {
-          const float p = static_cast<float>(x) + static_cast<float>(i) * sep;
-          for (int c = 0; c < 4; ++c) acc[c] += tap_1d(line, 4, src.width, p, c);
-        }
-        for (int c = 0; c < 4; ++c) dst[(x - x0) * 4 + c] = acc[c];
-      }
+      float* dst = horiz.data() + static_cast<size_t>(y - hy0) * hstride;
+      box_sums_1d(src.px(0, y), 4, src.width, size, sep, x0, x1,
+                  [&](int x, const float* sum) { std::copy(sum, sum + 4, dst + (x - x0) * 4); });
     });
     const float norm = 1.0f / static_cast<float>((2 * size + 1) * (2 * size + 1));
-    cpu::parallel_rows(y0, y1, threads_, [&](int y) {
-      for (int x = x0; x < x1; ++x) {
-        // The column of horizontal sums, indexed by absolute row, clamped to
-        // the image: rows outside [hy0, hy1) are never reached.
-        const float* column = horiz.data() + static_cast<size_t>(x - x0) * 4 -
-                              static_cast<ptrdiff_t>(hy0) * w * 4;
-        float acc[4] = {0, 0, 0, 0};
-        for (int j = -size; j <= size; ++j) {
-          const float p = static_cast<float>(y) + static_cast<float>(j) * sep;
-          for (int c = 0; c < 4; ++c) acc[c] += tap_1d(column, static_cast<ptrdiff_t>(w) * 4, src.height, p, c);
-        }
-        float* o = out.px(x, y);
-        for (int c = 0; c < 4; ++c) o[c] = acc[c] * norm;
+    // Vertical sums run down columns; columns are handed out in blocks so
+    // each worker's reads stay in a narrow band of the horizontal buffer.
+    constexpr int kBlock = 16;
+    const int blocks = (w + kBlock - 1) / kBlock;
+    cpu::parallel_rows(0, blocks, threads_, [&](int b) {
+      for (int x = x0 + b * kBlock; x < std::min(x1, x0 + (b + 1) * kBlock); ++x) {
+        // The column indexed by absolute row; taps clamp to [0, height) and
+        // never leave [hy0, hy1), which `reach` covers.
+        const float* column = horiz.data() + static_cast<size_t>(x - x0) * 4 - hy0 * hstride;
+        box_sums_1d(column, hstride, src.height, size, sep, y0, y1, [&](int y, const float* sum) {
+          float* o = out.px(x, y);
+          for (int c = 0; c < 4; ++c) o[c] = sum[c] * norm;
+        });
       }
     });
     return out;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace glint::cpu {
 namespace {
@@ -38,20 +39,33 @@ inline double clip_row(const double* P, int r, double x, double y, double z) {
 inline float view_distance(V3 v) { return -v.z; }
 
 // FIX 3: nearest texel at floor(uv * size); outside the image or on an
-// unseen texel is a miss. On a miss `out` is zeroed (w = 0).
-inline bool fetch_position(const Image& pos, float u, float v, float out[4]) {
+// unseen texel is a miss. Returns the texel's index (or -1 on a miss) and
+// its view distance (0 on a miss: the seed's cleared texel).
+inline long fetch_texel(const MarchSetup& s, float u, float v, float& scene_vd) {
+  const Image& pos = *s.position;
   const float fx = std::floor(u * static_cast<float>(pos.width));
   const float fy = std::floor(v * static_cast<float>(pos.height));
   if (fx >= 0.0f && fx < static_cast<float>(pos.width) && fy >= 0.0f &&
       fy < static_cast<float>(pos.height)) {
-    const float* p = pos.px(static_cast<int>(fx), static_cast<int>(fy));
-    if (texel_seen(p)) {
-      out[0] = p[0]; out[1] = p[1]; out[2] = p[2]; out[3] = p[3];
-      return true;
+    const long i = static_cast<long>(fy) * pos.width + static_cast<long>(fx);
+    const float vd = s.view_distance[i];
+    if (vd == vd) {
+      scene_vd = vd;
+      return i;
     }
   }
-  out[0] = out[1] = out[2] = out[3] = 0.0f;
-  return false;
+  scene_vd = 0.0f;
+  return -1;
+}
+
+// The full texel behind a fetch, (0, 0, 0, 0) for a miss.
+inline void texel_at(const MarchSetup& s, long i, float out[4]) {
+  if (i < 0) {
+    out[0] = out[1] = out[2] = out[3] = 0.0f;
+    return;
+  }
+  const float* p = s.position->data.data() + static_cast<size_t>(i) * 4;
+  out[0] = p[0]; out[1] = p[1]; out[2] = p[2]; out[3] = p[3];
 }
 
 // Reads the pixel's own position and normal; false where the seed reports 0.
@@ -190,11 +204,19 @@ void camera_eye(const Mat4& P, MarchSetup::Eye& kind, float eye[3]) {
   for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(sign * e[i] / dl);
 }
 
+void fill_view_distance(const Image& position, int y, float* out) {
+  for (int x = 0; x < position.width; ++x) {
+    const float* p = position.px(x, y);
+    out[x] = texel_seen(p) ? view_distance({p[0], p[1], p[2]}) : std::numeric_limits<float>::quiet_NaN();
+  }
+}
+
 MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
-                      const TraceOptions& opt) {
+                      const TraceOptions& opt, const float* view_distance) {
   MarchSetup s;
   s.position = &position;
   s.normal = &normal;
+  s.view_distance = view_distance;
   for (int i = 0; i < 16; ++i) {
     s.projd[i] = projection.m[i];
     s.proj[i] = static_cast<float>(projection.m[i]);
@@ -266,7 +288,8 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
   float search0 = 0.0f, search1 = 0.0f;
   int hit0 = 0, hit1 = 0;
   float depth = thickness;
-  float position_to[4] = {from.x, from.y, from.z, 1.0f};
+  long probe = -1;  // texel of the last probe; the seed's positionTo
+  float scene_vd = 0.0f;
 
   // First pass: samples at start_frag + k * increment, k = 1 .. int(delta).
   // int(delta) of the seed; a ray whose end projects absurdly far off-screen
@@ -287,10 +310,10 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
       frag[1] = start_frag[1] + kf * inc_y;
       uv[0] = frag[0] / tex_w;
       uv[1] = frag[1] / tex_h;
-      const bool seen = fetch_position(pos, uv[0], uv[1], position_to);
+      probe = fetch_texel(s, uv[0], uv[1], scene_vd);
       search1 = search_of(frag[0], frag[1]);
-      depth = ray_depth(search1) - view_distance({position_to[0], position_to[1], position_to[2]});
-      if (seen && depth > 0.0f && depth < thickness) {
+      depth = ray_depth(search1) - scene_vd;
+      if (probe >= 0 && depth > 0.0f && depth < thickness) {
         hit0 = 1;
         break;
       }
@@ -323,9 +346,9 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
     frag[1] = mixf(start_frag[1], end_frag[1], search1);
     uv[0] = frag[0] / tex_w;
     uv[1] = frag[1] / tex_h;
-    const bool seen = fetch_position(pos, uv[0], uv[1], position_to);
-    depth = ray_depth(search1) - view_distance({position_to[0], position_to[1], position_to[2]});
-    if (seen && depth > 0.0f && depth < thickness) {
+    probe = fetch_texel(s, uv[0], uv[1], scene_vd);
+    depth = ray_depth(search1) - scene_vd;
+    if (probe >= 0 && depth > 0.0f && depth < thickness) {
       hit1 = 1;
       search1 = search0 + ((search1 - search0) / 2.0f);
     } else {
@@ -339,6 +362,8 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
   // FIX 4: without a hit the product is zero; evaluating its other terms
   // could divide by a zero thickness or max_distance.
   if (hit1) {
+    float position_to[4];
+    texel_at(s, probe, position_to);
     const V3 to = {position_to[0], position_to[1], position_to[2]};
     visibility = static_cast<float>(hit1) * position_to[3] *
                  (1.0f - std::fmax(dot(unit_from * -1.0f, pivot), 0.0f)) *
@@ -369,7 +394,6 @@ void march_linear(const MarchSetup& s, int x, int y, float out[4]) {
   float max_distance = s.opt.max_distance;
   float step_size = max_distance / static_cast<float>(steps);
   float count = 1.0f;
-  float position_to[4];
 
   for (int i = 0; i < steps; ++i) {
     const float distance = count * step_size;
@@ -385,9 +409,9 @@ void march_linear(const MarchSetup& s, int x, int y, float out[4]) {
     const float oz = c[2] / c[3];
     if (!(ox >= 0.0f && oy >= 0.0f && oz >= -1.0f && ox <= 1.0f && oy <= 1.0f && oz <= 1.0f)) break;
 
-    const bool seen = fetch_position(*s.position, ox, oy, position_to);
+    float scene_vd;
+    const bool seen = fetch_texel(s, ox, oy, scene_vd) >= 0;
     const float sample_vd = view_distance(sample);
-    const float scene_vd = view_distance({position_to[0], position_to[1], position_to[2]});
     if (seen && sample_vd >= scene_vd && sample_vd <= scene_vd + thickness) {
       const float visibility = clamp01(1.0f - std::fmax(dot(reflection, unit_from * -1.0f), 0.0f));
       // The book writes (u, v, visibility, 1); Glint's buffer contract is

@@ -11,6 +11,10 @@ namespace glint::cpu {
 struct MarchSetup {
   const Image* position = nullptr;
   const Image* normal = nullptr;
+  // The view distance (-z) of every position texel, NaN where unseen. The
+  // hit tests need nothing else, and a quarter of the bytes keeps the march's
+  // scattered reads in cache; the full texel is read once, for the last probe.
+  const float* view_distance = nullptr;
   float proj[16];   // row-major float copy of the projection
   double projd[16];  // the same in double, for near-plane clipping
   ProjectionKind kind = ProjectionKind::Perspective;
@@ -26,8 +30,12 @@ struct MarchSetup {
 // and 3 of P e = 0 (it projects to no pixel). Exposed for the GL backend.
 void camera_eye(const Mat4& projection, MarchSetup::Eye& kind, float eye[3]);
 
+// `view_distance` must hold position.width * position.height floats filled by
+// fill_view_distance, and outlive the setup.
 MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
-                      const TraceOptions& opt);
+                      const TraceOptions& opt, const float* view_distance);
+// Row y of the view-distance buffer (see MarchSetup::view_distance).
+void fill_view_distance(const Image& position, int y, float* out);
 
 // Writes (u, v, visibility, visibility) for pixel (x, y); (0, 0, 0, 0) where
 // nothing was seen, the normal is zero, or the ray cannot be projected.
