@@ -96,6 +96,17 @@ def main():
             label = f"{v}" + (" (steps 100, thickness 1)" if knob == "march" and v == "linear" else "")
             lines.append(f"| {label} | {r['time']:.1f} | {r['recall']:.1%} | {r['err_px']:.2f} | {r['wrong']:.1%} |")
         lines.append("")
+    # The image size is a knob too (Blender's render percentage): the same
+    # scene and defaults at a quarter, half and full size of --size.
+    lines += ["### image size (defaults)", "", "| size | time (ms) | recall | err (px) | wrong |",
+              "|---|---|---|---|---|"]
+    for scale in (0.25, 0.5, 1.0):
+        sw, sh = max(1, round(w * scale)), max(1, round(h * scale))
+        gbs = analytic.render(scene, sw, sh)
+        truths = analytic.mirror_hits(scene, gbs, max_distance=np.inf)
+        r = measure(gbs, truths, dict(DEFAULTS), args.repeat, args.backend)
+        lines.append(f"| {sw}x{sh} | {r['time']:.1f} | {r['recall']:.1%} | {r['err_px']:.2f} | {r['wrong']:.1%} |")
+    lines.append("")
     text = "\n".join(lines)
     print(text)
     if args.markdown:
