@@ -22,6 +22,7 @@
 #include "glint/backend.h"
 #include "glint/errors.h"
 #include "glint/pipeline.h"
+#include "meshes.h"
 
 using namespace glint;
 
@@ -41,38 +42,6 @@ double median_ms(int reps, const std::function<void()>& f) {
 
 void row(const std::string& what, double cpu, double gl) {
   std::printf("%-34s %10.2f %10.2f %8.2f\n", what.c_str(), cpu, gl, gl / cpu);
-}
-
-// A wavy height field seen from above at an angle, two triangles per cell.
-Mesh height_field(long triangles) {
-  const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(triangles / 2.0))));
-  Mesh m;
-  auto vertex = [&](int i, int j, float* p, float* nrm) {
-    const double x = -8.0 + 16.0 * i / n, z = -2.0 - 14.0 * j / n;
-    const double y = -1.5 + 0.3 * std::sin(1.7 * x) * std::cos(1.3 * z);
-    const double dx = 0.3 * 1.7 * std::cos(1.7 * x) * std::cos(1.3 * z);
-    const double dz = -0.3 * 1.3 * std::sin(1.7 * x) * std::sin(1.3 * z);
-    const double len = std::sqrt(dx * dx + 1.0 + dz * dz);
-    p[0] = float(x), p[1] = float(y), p[2] = float(z);
-    nrm[0] = float(-dx / len), nrm[1] = float(1.0 / len), nrm[2] = float(-dz / len);
-  };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      float p[4][3], q[4][3];
-      vertex(i, j, p[0], q[0]);
-      vertex(i + 1, j, p[1], q[1]);
-      vertex(i + 1, j + 1, p[2], q[2]);
-      vertex(i, j + 1, p[3], q[3]);
-      static const int corners[2][3] = {{0, 1, 2}, {0, 2, 3}};
-      for (const auto& t : corners) {
-        for (int k = 0; k < 3; ++k) {
-          m.positions.insert(m.positions.end(), p[t[k]], p[t[k]] + 3);
-          m.normals.insert(m.normals.end(), q[t[k]], q[t[k]] + 3);
-        }
-        m.material.push_back(int((i + j) % 2));
-      }
-    }
-  return m;
 }
 
 }  // namespace
@@ -134,7 +103,7 @@ int main(int argc, char** argv) {
   mats[1].shininess = 20.0f;
   const std::vector<Image> maps;
   for (long n : {1000L, 100000L, 1000000L}) {
-    const Mesh mesh = height_field(n);
+    const Mesh mesh = bench::height_field(n, -1.5);
     const RasterInputs in{mesh, mats, maps, perspective(0.9, 1920.0 / 1080.0, 0.1, 100.0), 1920, 1080};
     const int r = n >= 1000000 ? std::max(1, reps / 2) : reps;
     const double c = median_ms(r, [&] { cpu->rasterize(in); });

@@ -13,6 +13,7 @@
 
 #include "glint/raster.h"
 #include "glint/stages.h"
+#include "meshes.h"
 
 using namespace glint;
 
@@ -21,35 +22,6 @@ namespace {
 constexpr int kWidth = 1920, kHeight = 1080;
 
 Mat4 camera() { return perspective(0.9, double(kWidth) / kHeight, 0.1, 100.0); }
-
-// A height field seen from above at an angle: n x n cells, two triangles each.
-Mesh grid_mesh(long triangles) {
-  const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(triangles / 2.0))));
-  Mesh m;
-  auto vertex = [&](int i, int j, float* p, float* nrm) {
-    const double x = -8.0 + 16.0 * i / n, z = -2.0 - 14.0 * j / n;
-    const double y = -2.0 + 0.3 * std::sin(1.7 * x) * std::cos(1.3 * z);
-    const double dx = 0.3 * 1.7 * std::cos(1.7 * x) * std::cos(1.3 * z);
-    const double dz = -0.3 * 1.3 * std::sin(1.7 * x) * std::sin(1.3 * z);
-    const double len = std::sqrt(dx * dx + 1 + dz * dz);
-    p[0] = float(x), p[1] = float(y), p[2] = float(z);
-    nrm[0] = float(-dx / len), nrm[1] = float(1 / len), nrm[2] = float(-dz / len);
-  };
-  auto push = [&](int i, int j) {
-    float p[3], nrm[3];
-    vertex(i, j, p, nrm);
-    m.positions.insert(m.positions.end(), p, p + 3);
-    m.normals.insert(m.normals.end(), nrm, nrm + 3);
-  };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      push(i, j), push(i + 1, j), push(i + 1, j + 1);
-      push(i, j), push(i + 1, j + 1), push(i, j + 1);
-      m.material.push_back(0);
-      m.material.push_back(1);
-    }
-  return m;
-}
 
 Mesh soup_mesh(long triangles) {
   std::mt19937 rng(1);
@@ -74,7 +46,7 @@ const Mesh& cached(bool grid, long triangles) {
   static std::map<std::pair<bool, long>, Mesh> cache;
   auto key = std::make_pair(grid, triangles);
   auto it = cache.find(key);
-  if (it == cache.end()) it = cache.emplace(key, grid ? grid_mesh(triangles) : soup_mesh(triangles)).first;
+  if (it == cache.end()) it = cache.emplace(key, grid ? bench::height_field(triangles) : soup_mesh(triangles)).first;
   return it->second;
 }
 
