@@ -13,7 +13,7 @@ packages=(
   libglm-dev libopenexr-dev
   libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   googletest libgtest-dev libbenchmark-dev
-  blender
+  blender xvfb xauth
 )
 
 if [[ "${GLINT_NO_APT:-0}" != 1 ]]; then

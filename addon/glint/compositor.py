@@ -35,14 +35,26 @@ def ensure_image(name: str, width: int = 4, height: int = 4):
         img = bpy.data.images.new(name, width, height, alpha=True, float_buffer=True)
         img.generated_color = (0.0, 0.0, 0.0, 1.0)
     # Data, not colour: no view transform, no premultiplication of the alpha.
-    img.colorspace_settings.name = "Non-Color"
-    img.alpha_mode = "CHANNEL_PACKED"
-    img.use_fake_user = False
+    # Set only when different: each assignment runs an RNA update (the colour
+    # space one frees the image's buffers and tags the depsgraph), which must
+    # not happen per frame on a render thread.
+    if img.colorspace_settings.name != "Non-Color":
+        img.colorspace_settings.name = "Non-Color"
+    if img.alpha_mode != "CHANNEL_PACKED":
+        img.alpha_mode = "CHANNEL_PACKED"
+    if img.use_fake_user:
+        img.use_fake_user = False
     return img
+
+
+# Images written since they were last cleared. None: not known yet this session
+# (a saved file may hold packed pixels), so the first clear clears them all.
+_filled = None
 
 
 def fill_images(images: Dict[str, np.ndarray]) -> None:
     """Write float32 [h, w, 4] arrays (row 0 at the bottom) into the named images."""
+    global _filled
     for name, arr in images.items():
         arr = np.ascontiguousarray(arr, dtype=np.float32)
         h, w = arr.shape[:2]
@@ -54,6 +66,28 @@ def fill_images(images: Dict[str, np.ndarray]) -> None:
                 img.scale(w, h)
         img.pixels.foreach_set(arr.ravel())
         img.update()
+        if _filled is not None:
+            _filled.add(name)
+
+
+def clear_images() -> None:
+    """Zero the Glint images that hold a frame: with a zero mask the group passes
+    the render through unchanged (out = base * 1 + 0), so a frame Glint cannot
+    handle composites as if Glint were off. Images are not copied for the render
+    (under F12 the node tree is, before ``frame_change_post``: a mute set there
+    is not seen), so what is written here is what the compositor reads."""
+    global _filled
+    names = cg.ALL_IMAGES if _filled is None else sorted(_filled)
+    for name in names:
+        img = bpy.data.images.get(name)
+        if img is None:
+            continue
+        w, h = img.size
+        if w * h == 0:
+            continue
+        img.pixels.foreach_set(np.zeros(w * h * 4, dtype=np.float32))
+        img.update()
+    _filled = set()
 
 
 # ----------------------------------------------------------------------------
@@ -70,7 +104,7 @@ def _new_socket(tree, name: str, socket_type: str, in_out: str):
 def build_group():
     """(Re)build the node group from the description; returns it."""
     group = bpy.data.node_groups.get(cg.GROUP_NAME)
-    if group is not None and group.get(LAYOUT_KEY) == _layout_hash() and group.bl_idname == "CompositorNodeTree":
+    if _group_is_current(group):
         return group
     if group is None or group.bl_idname != "CompositorNodeTree":
         group = bpy.data.node_groups.new(cg.GROUP_NAME, "CompositorNodeTree")
@@ -151,24 +185,56 @@ def _is_default_tree(tree) -> bool:
                      ["CompositorNodeComposite", "CompositorNodeRLayers", "CompositorNodeViewer"])
 
 
-def ensure(scene) -> Optional[str]:
-    """Put the group in the scene's compositor (idempotent). Returns a warning or None."""
+class SetupIncomplete(Exception):
+    """The compositor set-up needs changes that :func:`ensure` was told not to make."""
+
+
+def _group_is_current(group) -> bool:
+    if group is None or group.bl_idname != "CompositorNodeTree" or group.get(LAYOUT_KEY) != _layout_hash():
+        return False
+    # Every image node still has its image (a user may have deleted one).
+    for name, (kind, props, _) in cg.GROUP_NODES.items():
+        if "image" in props:
+            node = group.nodes.get(name)
+            if node is None or node.image is None or node.image.name != props["image"]:
+                return False
+    return True
+
+
+def ensure(scene, allow_changes: bool = True) -> Optional[str]:
+    """Put the group in the scene's compositor (idempotent). Returns a warning or None.
+
+    Nothing is written when the set-up is already in place, so a render thread
+    can call this. With ``allow_changes=False`` a needed structural change (nodes,
+    links, the group, its images) raises :class:`SetupIncomplete` instead; values
+    the render needs now (blur size, debug switches, the EXR folder, an old
+    file's muted group node) are still written when they differ."""
+    def change(what: str) -> None:
+        if not allow_changes:
+            raise SetupIncomplete(what)
+
     glint = scene.glint
     if not scene.use_nodes or scene.node_tree is None:
+        change("the compositor's nodes are off")
         scene.use_nodes = True
         glint.owns_use_nodes = True
     tree = scene.node_tree
-    group = build_group()
-    update_group(glint)
+    group = bpy.data.node_groups.get(cg.GROUP_NAME)
+    if not _group_is_current(group):
+        change("Glint's node group is missing or out of date")
+        group = build_group()
+    update_group(glint)  # values only, written when they differ
     view_layer = target_view_layer(scene)
     rl = _render_layers_node(tree, scene, view_layer)
     if rl is None:
+        change(f"no Render Layers node for view layer {view_layer.name!r}")
         rl = tree.nodes.new("CompositorNodeRLayers")
         rl.scene = scene
         rl.layer = view_layer.name
         rl.location = (-300, 0)
     gnode = tree.nodes.get(cg.GROUP_NODE_NAME)
     if gnode is None or gnode.bl_idname != "CompositorNodeGroup":
+        change("the Glint node is missing from the compositor")
         gnode = tree.nodes.new("CompositorNodeGroup")
         gnode.name = cg.GROUP_NODE_NAME
         gnode.label = "Glint Reflections"
@@ -186,10 +252,16 @@ def ensure(scene) -> Optional[str]:
                 comp.location = (gnode.location.x + 300, gnode.location.y)
             tree.links.new(gnode.outputs["Image"], comp.inputs["Image"])
     elif gnode.node_tree != group:
+        change("the Glint node uses another node group")
         gnode.node_tree = group
+    # The group is never muted: a frame Glint does not handle gets zeroed images
+    # instead (clear_images), which the render sees; older versions muted it.
+    if gnode.mute:
+        gnode.mute = False
     if not any(l.from_node == rl for l in gnode.inputs["Image"].links):
+        change("the Glint node is not fed by the Render Layers node")
         tree.links.new(rl.outputs["Image"], gnode.inputs["Image"])
-    _ensure_exr_node(scene, tree, gnode)
+    _ensure_exr_node(scene, tree, gnode, change)
     if not scene.render.use_compositing:
         return ("compositing is off (Output Properties > Post Processing > Compositing): "
                 "reflections cannot be composited")
@@ -202,13 +274,15 @@ def exr_base_path(scene) -> str:
     return (scene.render.filepath or "//").replace("#", "") + "glint_"
 
 
-def _ensure_exr_node(scene, tree, gnode) -> None:
+def _ensure_exr_node(scene, tree, gnode, change) -> None:
     node = tree.nodes.get(cg.EXR_NODE_NAME)
     if not scene.glint.write_layers_exr:
         if node is not None:
+            change("the layers EXR node is no longer wanted")
             tree.nodes.remove(node)
         return
     if node is None:
+        change("the layers EXR node is missing")
         node = tree.nodes.new("CompositorNodeOutputFile")
         node.name = cg.EXR_NODE_NAME
         node.label = "Glint layers (EXR)"
@@ -221,14 +295,8 @@ def _ensure_exr_node(scene, tree, gnode) -> None:
             node.layer_slots.new(slot)
         for slot, output in cg.EXR_LAYERS:
             tree.links.new(gnode.outputs[output], node.inputs[slot])
-    node.base_path = exr_base_path(scene)
-
-
-def set_active(scene, active: bool) -> None:
-    """Mute the group (the frame passes through unchanged) or let it composite."""
-    gnode = group_node(scene)
-    if gnode is not None and gnode.mute == active:
-        gnode.mute = not active
+    if node.base_path != exr_base_path(scene):
+        node.base_path = exr_base_path(scene)
 
 
 def remove(scene) -> None:

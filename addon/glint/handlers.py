@@ -7,21 +7,38 @@ Order of events for every rendered frame (all engines; checked with Blender 3.4)
                                        evaluated at the frame, per view layer
   -> engine renders -> compositor -> file written -> render_post
 
+Under ``-b`` all of them run on the main thread; under F12 in the UI all of them
+run on the render job's thread while the UI stays live (checked under Xvfb).
+
 Glint exports from that depsgraph (render visibility, render modifiers, the
-frame's animation), never from ``bpy.context``. ``render_pre`` mutes the group
-so that a frame Glint cannot handle composites unchanged; a successful frame
-unmutes it. Motion blur re-evaluates sub-frames: only the first evaluation at
-the frame itself is used.
+frame's animation), never from ``bpy.context``. Under F12 the compositor works on
+a copy of the node tree taken before ``frame_change_post``: muting or unmuting
+Glint's node there never reaches it. So the node stays unmuted; ``render_pre``
+zeroes Glint's images, which makes the group pass the frame through unchanged,
+and a successful frame fills them. Images are not copied for the render: the
+compositor reads what was written.
+From the render thread Glint writes only those images and, when they changed,
+a few node values (blur size, debug switches, the EXR folder); a compositor
+set-up that needs new nodes or links is repaired on the main thread and the
+frame renders without reflections, with a report. Motion blur re-evaluates
+sub-frames: only the first evaluation at the frame itself is used.
 """
 from __future__ import annotations
+
+import queue
+import threading
+import traceback
 
 import bpy
 from bpy.app.handlers import persistent
 
 from . import compositor, frame, native
-from .state import STATE, log
+from .state import STATE, FrameReport, log
 
-_job = {"scene": None, "target": None, "done": False, "ui_notice": None}
+_job = {"scene": None, "target": None, "done": False, "skip": None, "ui_notice": None}
+
+# How often the main thread looks for queued work (reports, redraws, repairs).
+TICK_SECONDS = 0.2
 
 
 def _enabled(scene) -> bool:
@@ -29,13 +46,25 @@ def _enabled(scene) -> bool:
     return bool(glint is not None and glint.enabled)
 
 
-def _progress_printer(fraction: float, message: str) -> None:
-    log(f"export {fraction * 100.0:.0f}% ({message})")
+def _on_main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+def _progress(fraction: float, message: str) -> None:
+    STATE.progress = f"export {fraction * 100.0:.0f}% ({message})"
+    log(STATE.progress)
+
+
+def _repair_setup(scene_name: str) -> None:
+    scene = bpy.data.scenes.get(scene_name)
+    if scene is not None and _enabled(scene):
+        compositor.ensure(scene)
+        log(f"compositor set-up of scene {scene_name!r} restored")
 
 
 @persistent
 def on_render_init(scene, *args):
-    _job.update(scene=None, target=None, done=False)
+    _job.update(scene=None, target=None, done=False, skip=None)
     if not _enabled(scene):
         return
     _job["scene"] = scene.name
@@ -43,13 +72,27 @@ def on_render_init(scene, *args):
     if native.load() is None:
         log(f"reflections are off for this render: {native.error()}")
     try:
-        warning = compositor.ensure(scene)
-    except Exception as exc:  # never let a node-tree problem stop the render
-        log(f"could not set up the compositor ({type(exc).__name__}: {exc}); no reflections")
-        _job["scene"] = None
+        warning = compositor.ensure(scene, allow_changes=_on_main_thread())
+    except compositor.SetupIncomplete as exc:
+        # New nodes and links are not made from the render thread while the UI
+        # may be drawing or evaluating the same trees: the main thread does it.
+        STATE.on_main_thread(lambda name=scene.name: _repair_setup(name))
+        _skip(scene, f"the compositor set-up was changed ({exc}); Glint restores it now, render again")
         return
-    if warning:
-        log(warning)
+    except Exception as exc:  # never let a node-tree problem stop the render
+        traceback.print_exc()
+        _skip(scene, f"could not set up the compositor ({type(exc).__name__}: {exc})")
+        return
+    if warning:  # compositing is off: nothing Glint makes would reach the frame
+        _skip(scene, warning)
+
+
+def _skip(scene, reason: str) -> None:
+    """This render gets no reflections, for ``reason``: say so everywhere."""
+    _job["skip"] = reason
+    log(f"this render gets no reflections: {reason}")
+    STATE.last = FrameReport(frame=scene.frame_current, status="error", message=reason)
+    _notify_ui(reason)
 
 
 @persistent
@@ -58,14 +101,18 @@ def on_render_pre(scene, *args):
         return
     _job["target"] = (scene.frame_current, round(scene.frame_subframe, 6))
     _job["done"] = False
-    compositor.set_active(scene, False)
+    try:
+        compositor.clear_images()  # a frame Glint does not handle passes through
+    except Exception as exc:
+        traceback.print_exc()
+        log(f"could not clear Glint's images ({type(exc).__name__}: {exc})")
 
 
 @persistent
 def on_frame_change_post(scene, depsgraph=None, *args):
     if depsgraph is None or depsgraph.mode != "RENDER" or _job["done"]:
         return
-    if _job["scene"] != scene.name or _job["target"] is None or not _enabled(scene):
+    if _job["scene"] != scene.name or _job["target"] is None or not _enabled(scene) or _job["skip"]:
         return
     ev = depsgraph.scene_eval
     if (ev.frame_current, round(ev.frame_subframe, 6)) != _job["target"]:
@@ -73,20 +120,18 @@ def on_frame_change_post(scene, depsgraph=None, *args):
     if depsgraph.view_layer.name != compositor.target_view_layer(scene).name:
         return
     _job["done"] = True
-    STATE.busy = True
+    STATE.busy, STATE.progress = True, ""
+    STATE.touch()
     try:
-        report = frame.run(depsgraph, scene, should_stop=STATE.cancel.is_set, progress_report=_progress_printer)
+        report = frame.run(depsgraph, scene, should_stop=STATE.cancel.is_set, progress_report=_progress)
     except Exception as exc:  # an add-on bug must not take the render down
-        import traceback
         traceback.print_exc()
-        from .state import FrameReport
         report = FrameReport(frame=ev.frame_current, status="error", message=f"{type(exc).__name__}: {exc}")
     finally:
-        STATE.busy = False
+        STATE.busy, STATE.progress = False, ""
     STATE.last = report
     t = ", ".join(f"{k} {v:.1f} ms" for k, v in report.timings_ms.items())
     if report.status == "ok":
-        compositor.set_active(scene, True)
         log(f"frame {report.frame}: reflections composited ({report.width}x{report.height}, "
             f"{report.triangles} triangles from {report.objects} objects, {report.culled} culled, "
             f"{report.reflective_pixels} reflective pixels, backend {report.backend}; {t})")
@@ -94,36 +139,79 @@ def on_frame_change_post(scene, depsgraph=None, *args):
         log(f"frame {report.frame}: nothing to reflect: {report.message} ({t or 'no work'})")
     else:
         log(f"frame {report.frame}: rendered WITHOUT reflections: {report.message}")
-        _notify_ui(report.message)
+        # A cancel the user asked for is reported, not shown as an error pop-up.
+        _notify_ui(report.message, level="WARNING" if report.status == "cancelled" else "ERROR")
 
 
-def _notify_ui(message: str) -> None:
-    """In the UI, show the error once the render is over (from the main thread)."""
+def _notify_ui(message: str, level: str = "ERROR") -> None:
+    """In the UI, report a frame without reflections from the main thread: the
+    status bar and the Info log, and for errors Blender's report pop-up over the
+    render window."""
     if bpy.app.background or _job.get("ui_notice") == message:
         return
     _job["ui_notice"] = message
+    STATE.on_main_thread(lambda: _show_report(message, level))
 
-    def popup():
-        wm = bpy.context.window_manager
-        if wm is None:
-            return None
 
-        def draw(menu, _context):
-            menu.layout.label(text=message, icon="ERROR")
+def _report_window(wm):
+    """The window showing the Render Result if there is one (F12 opens it), else the first."""
+    for win in wm.windows:
+        for area in win.screen.areas:
+            space = area.spaces.active
+            if area.type == "IMAGE_EDITOR" and space.image is not None and space.image.type == "RENDER_RESULT":
+                return win
+    return wm.windows[0] if len(wm.windows) else None
 
-        wm.popup_menu(draw, title="Glint: rendered without reflections", icon="ERROR")
-        return None
 
-    try:
-        bpy.app.timers.register(popup, first_interval=0.1)
-    except Exception:
-        pass
+def _show_report(message: str, level: str) -> None:
+    wm = bpy.context.window_manager
+    win = _report_window(wm) if wm is not None else None
+    if win is None:
+        return
+    # A modal operator's report: Blender puts it in the status bar and the Info log
+    # and, for an error, opens its report pop-up in the window.
+    with bpy.context.temp_override(window=win, screen=win.screen):
+        bpy.ops.glint.report("INVOKE_DEFAULT", level=level,
+                             message=f"Glint: rendered without reflections: {message}")
+
+
+def _redraw_panels() -> None:
+    for wm in bpy.data.window_managers:
+        for win in wm.windows:
+            for area in win.screen.areas:
+                if area.type == "PROPERTIES":
+                    area.tag_redraw()
+
+
+_seen = {"version": -1}
+
+
+def _main_thread_tick():
+    """Runs on the main thread: queued work from render threads, panel redraws
+    (status line, progress, the Cancel button) when the state changed."""
+    while True:
+        try:
+            fn = STATE.main_queue.get_nowait()
+        except queue.Empty:
+            break
+        try:
+            fn()
+        except Exception:
+            traceback.print_exc()
+    if STATE.version != _seen["version"]:
+        _seen["version"] = STATE.version
+        try:
+            _redraw_panels()
+        except Exception:
+            traceback.print_exc()
+    return TICK_SECONDS
 
 
 @persistent
 def on_render_end(scene, *args):
     if _job["scene"] == scene.name:
-        _job.update(scene=None, target=None, done=False, ui_notice=None)
+        _job.update(scene=None, target=None, done=False, skip=None, ui_notice=None)
+        STATE.touch()
 
 
 @persistent
@@ -153,6 +241,8 @@ def register():
         lst = getattr(bpy.app.handlers, name)
         if fn not in lst:
             lst.append(fn)
+    if not bpy.app.background and not bpy.app.timers.is_registered(_main_thread_tick):
+        bpy.app.timers.register(_main_thread_tick, first_interval=TICK_SECONDS, persistent=True)
 
 
 def unregister():
@@ -160,3 +250,5 @@ def unregister():
         lst = getattr(bpy.app.handlers, name)
         while fn in lst:
             lst.remove(fn)
+    if bpy.app.timers.is_registered(_main_thread_tick):
+        bpy.app.timers.unregister(_main_thread_tick)

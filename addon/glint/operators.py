@@ -43,6 +43,39 @@ class GLINT_OT_cancel(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class GLINT_OT_report(bpy.types.Operator):
+    """Show a Glint message in the status bar and the Info log (used after renders)"""
+
+    bl_idname = "glint.report"
+    bl_label = "Glint Report"
+    bl_options = {"INTERNAL"}
+
+    message: bpy.props.StringProperty(options={"SKIP_SAVE"})
+    level: bpy.props.EnumProperty(items=(("ERROR", "Error", ""), ("WARNING", "Warning", ""), ("INFO", "Info", "")),
+                                  default="ERROR", options={"SKIP_SAVE"})
+
+    _timer = None
+
+    def invoke(self, context, event):
+        # Reports of an operator called from Python stay with the caller; a modal
+        # operator's go to the window manager: the status bar and the Info log.
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.01, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        context.window_manager.event_timer_remove(self._timer)
+        self.report({self.level}, self.message)
+        return {"FINISHED"}
+
+    def execute(self, context):
+        self.report({self.level}, self.message)
+        return {"FINISHED"}
+
+
 class GLINT_OT_setup_compositor(bpy.types.Operator):
     """Put Glint's node group back into this scene's compositor"""
 
@@ -174,6 +207,7 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (GLINT_OT_retry_native, GLINT_OT_cancel, GLINT_OT_setup_compositor, GLINT_OT_compute_layers)
+CLASSES = (GLINT_OT_retry_native, GLINT_OT_cancel, GLINT_OT_report, GLINT_OT_setup_compositor,
+           GLINT_OT_compute_layers)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

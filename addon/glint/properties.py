@@ -91,7 +91,7 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
         name="Write Layers EXR", default=False, update=_on_compositor_setting,
         description="Also write every layer (base, reflection, position, normal, specular, uv, "
                     "visibility) to a multilayer EXR beside the output, <output>glint_<frame>.exr")
-    view_layer: StringProperty(name="View Layer", default="",
+    view_layer: StringProperty(name="View Layer", default="", update=_on_compositor_setting,
                                description="View layer to reflect (empty: the first one rendered)")
     owns_use_nodes: BoolProperty(default=False, options={"HIDDEN"},
                                  description="Glint switched the compositor on and will switch it off")

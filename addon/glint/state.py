@@ -2,13 +2,17 @@
 
 Renders run handlers on a worker thread (F12) or the main thread (``-b``);
 writing to the scene from there would tag the depsgraph mid-render, so the
-results are kept here and the panel reads them.
+results are kept here and the panel reads them. What must happen on Blender's
+main thread (redrawing the panel, a pop-up, a report, repairing the compositor
+set-up) is queued with :meth:`_State.on_main_thread`; ``handlers`` runs the
+queue from a timer.
 """
 from __future__ import annotations
 
+import queue
 import threading
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, Optional
 
 PREFIX = "Glint:"
 
@@ -35,6 +39,11 @@ class _State:
         self.messages: List[str] = []
         self.cancel = threading.Event()
         self.busy = False
+        # "export 40% (...)" while a render's export reports progress, else "".
+        self.progress = ""
+        # Bumped on every change the panel shows: the main thread redraws on a change.
+        self.version = 0
+        self.main_queue: "queue.SimpleQueue[Callable[[], None]]" = queue.SimpleQueue()
         # The last frame's arrays (position, normal, specular, uv, projection),
         # for the debug operators and for tests that inspect an export.
         self.arrays: Dict[str, object] = {}
@@ -45,7 +54,17 @@ class _State:
         with self.lock:
             self.messages.append(message)
             del self.messages[:-20]
+        self.touch()
         return line
+
+    def touch(self) -> None:
+        """Something the panel shows changed."""
+        with self.lock:
+            self.version += 1
+
+    def on_main_thread(self, fn: Callable[[], None]) -> None:
+        """Run ``fn`` on Blender's main thread soon (from any thread)."""
+        self.main_queue.put(fn)
 
 
 STATE = _State()

@@ -43,6 +43,8 @@ class GLINT_PT_render(bpy.types.Panel):
             if last.timings_ms:
                 layout.label(text=", ".join(f"{k} {v:.0f} ms" for k, v in last.timings_ms.items()))
         if STATE.busy:
+            if STATE.progress:
+                layout.label(text=STATE.progress, icon="TIME")
             layout.operator("glint.cancel", icon="CANCEL")
 
 

@@ -17,29 +17,16 @@ from bpy_extras.object_utils import world_to_camera_view
 
 cfg = json.load(open(sys.argv[sys.argv.index("--") + 1]))
 scene = bpy.context.scene
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scene_config  # noqa: E402  (beside this file)
+
+scene_config.apply(scene, cfg)
 r = scene.render
-if "engine" in cfg:
-    r.engine = cfg["engine"]
-if "size" in cfg:
-    r.resolution_x, r.resolution_y = cfg["size"]
-r.resolution_percentage = cfg.get("percentage", 100)
 r.image_settings.file_format = cfg.get("exr", "OPEN_EXR")
 if r.image_settings.file_format.startswith("OPEN_EXR"):
     r.image_settings.color_depth = "32"
     r.image_settings.exr_codec = "ZIP"
 r.filepath = os.path.join(cfg["out"], "frame_")
-r.dither_intensity = 0.0
-scene.eevee.taa_render_samples = cfg.get("eevee_samples", 4)
-scene.cycles.samples = cfg.get("cycles_samples", 4)
-scene.cycles.use_denoising = False
-
-glint_cfg = dict(cfg.get("glint", {}))
-enabled = glint_cfg.pop("enabled", None)
-if hasattr(scene, "glint"):
-    for key, value in glint_cfg.items():
-        setattr(scene.glint, key, value)
-    if enabled is not None:
-        scene.glint.enabled = enabled
 exec(cfg.get("python", ""))
 
 

@@ -1,0 +1,298 @@
+"""Runs inside Blender WITH a window (under xvfb-run) for tests/blender/test_ui_render.py:
+press F12 the way a user does, once or several times, and record what happened.
+
+Usage: xvfb-run blender file.blend --addons glint --python ui_driver.py -- config.json
+
+config keys: out (folder), size [w, h], engine, eevee_samples, cycles_samples,
+glint {setting: value} ('enabled' last), python (code run after the settings),
+mirror_objects [names] (their vertices and their mirror images in z = 0 through
+Blender's world_to_camera_view, into the result), screenshot (bool, default true),
+timeout (seconds per render), renders: a list of steps, one F12 each, with keys
+  python            code run on the main thread just before the F12 (a user's edit)
+  cancel_when_busy  press Glint's Cancel button once the panel has drawn the export's progress
+  check             a Python expression evaluated after the render, its value recorded
+  animation         render the frame range (Ctrl F12) instead of one frame
+
+F12 is ``render.render('INVOKE_DEFAULT')`` from a timer in the main window's
+context: the render runs as a job on its own thread and opens the render window,
+as the key does. For render i: <out>/render_<i>.exr (float) and .png saved from
+the Render Result, screenshots <out>/window_<w>_<i>.png. <out>/result.json holds,
+per render, the handler calls (with the thread each ran on), Glint's status, the
+Glint panel's draws, and at the end the Info log's reports. Quits Blender when
+done, or exits with status 4 after a timeout.
+"""
+import json
+import os
+import sys
+import threading
+import time
+import traceback
+
+import bpy
+from bpy_extras.object_utils import world_to_camera_view
+from mathutils import Vector
+
+cfg = json.load(open(sys.argv[sys.argv.index("--") + 1]))
+OUT = cfg["out"]
+os.makedirs(OUT, exist_ok=True)
+scene = bpy.context.scene
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scene_config  # noqa: E402  (beside this file)
+
+scene_config.apply(scene, cfg)
+r = scene.render
+exec(cfg.get("python", ""))
+
+T0 = time.monotonic()
+RENDERS = cfg.get("renders", [{}])
+result = {"renders": [], "errors": [], "objects": {}}
+for name in cfg.get("mirror_objects", []):
+    ob = bpy.data.objects[name]
+    pts = [ob.matrix_world @ v.co for v in ob.data.vertices]
+    result["objects"][name] = {
+        "real": [list(world_to_camera_view(scene, scene.camera, q)) for q in pts],
+        "mirror": [list(world_to_camera_view(scene, scene.camera, Vector((q.x, q.y, -q.z)))) for q in pts]}
+
+
+def _now():
+    return round(time.monotonic() - T0, 3)
+
+
+def _current():
+    return result["renders"][-1] if result["renders"] else None
+
+
+def _event(name, **extra):
+    cur = _current()
+    if cur is not None:
+        cur["events"].append(dict(event=name, t=_now(), **extra))
+
+
+def _recorder(name):
+    def handler(*args):
+        _event(name, main_thread=threading.current_thread() is threading.main_thread())
+    return handler
+
+
+for _name in ("render_init", "render_pre", "render_post", "render_complete", "render_cancel",
+              "frame_change_post"):
+    getattr(bpy.app.handlers, _name).append(_recorder(_name))
+
+
+def _glint_state():
+    try:
+        import glint.state as st
+    except ImportError:
+        return None
+    return st.STATE
+
+
+def _glint_status():
+    st = _glint_state()
+    last = st.last if st is not None else None
+    return None if last is None else {"status": last.status, "message": last.message, "backend": last.backend,
+                                      "frame": last.frame, "timings": last.timings_ms}
+
+
+def _override(win, area_type=None):
+    area = next(a for a in win.screen.areas if area_type is None or a.type == area_type)
+    region = next((rg for rg in area.regions if rg.type == "WINDOW"), area.regions[0])
+    return bpy.context.temp_override(window=win, screen=win.screen, area=area, region=region)
+
+
+def _main_window():
+    return bpy.context.window_manager.windows[0]
+
+
+def _biggest_area():
+    return max(_main_window().screen.areas, key=lambda a: a.width * a.height)
+
+
+def _open_glint_panel():
+    """The main window's biggest area becomes Render Properties with Glint's panel
+    open (it is DEFAULT_CLOSED) and its draws recorded; returns False until the
+    editor has been drawn once (its tabs exist from then on)."""
+    area = _biggest_area()
+    if area.type != "PROPERTIES":
+        area.type = "PROPERTIES"
+        return False
+    area.spaces.active.context = "RENDER"
+    try:
+        import glint.ui as ui
+    except ImportError:
+        return True
+    for cls in reversed(ui.CLASSES):
+        bpy.utils.unregister_class(cls)
+    ui.GLINT_PT_render.bl_options = set()
+    draw = ui.GLINT_PT_render.draw
+
+    def recorded_draw(self, context):
+        draw(self, context)
+        st = _glint_state()
+        cur = _current()
+        if cur is not None:
+            cur["panel_draws"].append({"t": _now(), "status": st.last.status if st.last else None,
+                                       "busy": st.busy, "progress": st.progress})
+
+    ui.GLINT_PT_render.draw = recorded_draw
+    for cls in ui.CLASSES:
+        bpy.utils.register_class(cls)
+    return True
+
+
+def _scroll_to_glint():
+    win = _main_window()
+    area = _biggest_area()
+    region = next(rg for rg in area.regions if rg.type == "WINDOW")
+    with bpy.context.temp_override(window=win, screen=win.screen, area=area, region=region):
+        for _ in range(20):  # Glint's panel is the last but one of the Render tab
+            bpy.ops.view2d.scroll_down(page=True)
+
+
+def _info_reports():
+    """The Info log's reports (what the status bar showed), via the Info editor's copy."""
+    win = _main_window()
+    area = min(win.screen.areas, key=lambda a: a.width * a.height)
+    old = area.type
+    area.type = "INFO"
+    wm = bpy.context.window_manager
+    wm.clipboard = ""
+    try:
+        with bpy.context.temp_override(window=win, screen=win.screen, area=area):
+            bpy.ops.info.select_all(action="SELECT")
+            bpy.ops.info.report_copy()
+        return wm.clipboard.splitlines()
+    finally:
+        area.type = old
+
+
+def _screenshots(tag):
+    wm = bpy.context.window_manager
+    for w, win in enumerate(wm.windows):
+        if any(a.type == "IMAGE_EDITOR" for a in win.screen.areas):
+            with _override(win, "IMAGE_EDITOR"):
+                bpy.ops.image.view_all(fit_view=True)
+        with _override(win):
+            try:
+                bpy.ops.screen.screenshot(filepath=os.path.join(OUT, f"window_{w}_{tag}.png"))
+            except Exception as exc:
+                result["errors"].append(f"screenshot {w}: {exc}")
+
+
+def _collect(i, step):
+    cur = _current()
+    cur["glint"] = _glint_status()
+    cur["job_running"] = bpy.app.is_job_running("RENDER")
+    if step.get("check"):
+        cur["check"] = eval(step["check"])
+    img = bpy.data.images.get("Render Result")
+    cur["has_render_result"] = img is not None
+    if img is not None:
+        fmt = (r.image_settings.file_format, r.image_settings.color_depth)
+        for name, file_format, depth in ((f"render_{i}.exr", "OPEN_EXR", "32"), (f"render_{i}.png", "PNG", "8")):
+            r.image_settings.file_format, r.image_settings.color_depth = file_format, depth
+            try:
+                img.save_render(os.path.join(OUT, name), scene=scene)
+            except Exception as exc:
+                result["errors"].append(f"save_render {name}: {exc}")
+        r.image_settings.file_format, r.image_settings.color_depth = fmt
+
+
+def _finish():
+    st = _glint_state()
+    if st is not None:
+        with st.lock:
+            result["glint_messages"] = list(st.messages)
+    try:
+        import glint.native as native
+        result["native_error"] = native.error()
+    except ImportError:
+        pass
+    try:
+        result["info_reports"] = _info_reports()
+    except Exception as exc:
+        result["errors"].append(f"info reports: {exc}")
+    result["windows"] = [{"screen": w.screen.name, "areas": [a.type for a in w.screen.areas]}
+                         for w in bpy.context.window_manager.windows]
+
+
+def _write():
+    with open(os.path.join(OUT, "result.json"), "w") as f:
+        json.dump(result, f, indent=1, default=str)
+
+
+state = {"phase": "panel", "index": 0}
+SHOTS = cfg.get("screenshot", True)
+
+
+def tick():
+    try:
+        return _tick()
+    except Exception:
+        result["errors"].append(traceback.format_exc())
+        _write()
+        os._exit(3)
+
+
+def _tick():
+    phase = state["phase"]
+    i = state["index"]
+    if phase == "panel":
+        if SHOTS and not _open_glint_panel():
+            return 0.2
+        state["phase"] = "scroll"
+        return 0.2
+    if phase == "scroll":
+        if SHOTS:
+            _scroll_to_glint()
+        state["phase"] = "f12"
+        return 0.2
+    if phase == "f12":
+        step = RENDERS[i]
+        result["renders"].append({"events": [], "panel_draws": []})
+        exec(step.get("python", ""))
+        _event("F12")  # before the call: the render thread starts within it
+        with _override(_main_window()):
+            ret = bpy.ops.render.render("INVOKE_DEFAULT", animation=bool(step.get("animation")))
+        _current()["invoke"] = sorted(ret)
+        state.update(phase="rendering", started=time.monotonic())
+        return 0.05
+    if phase == "rendering":
+        step, cur, st = RENDERS[i], _current(), _glint_state()
+        shown = any(d["progress"] for d in cur["panel_draws"])
+        if step.get("cancel_when_busy") and st is not None and st.busy and shown and not state.get("cancelled"):
+            # What the panel's "Cancel Glint" button runs, on the main thread, mid-export.
+            state["cancelled"] = True
+            _event("cancel_glint", progress=st.progress)
+            with _override(_main_window()):
+                bpy.ops.glint.cancel()
+            if SHOTS:
+                _screenshots(f"{i}_busy")
+        ended = any(e["event"] in ("render_complete", "render_cancel") for e in cur["events"])
+        if ended and not bpy.app.is_job_running("RENDER"):
+            state.update(phase="settle", settle=time.monotonic())
+            return 0.1
+        if time.monotonic() - state["started"] > cfg.get("timeout", 60):
+            cur["timeout"] = True
+            _finish()
+            _write()
+            os._exit(4)
+        return 0.05
+    if phase == "settle":
+        # A few redraws of the render window and the panel before looking at them.
+        if time.monotonic() - state["settle"] < 0.6:
+            return 0.1
+        _collect(i, RENDERS[i])
+        if SHOTS:
+            _screenshots(str(i))
+        state["index"] = i + 1
+        state["phase"] = "f12" if i + 1 < len(RENDERS) else "done"
+        return 0.1
+    _finish()
+    _write()
+    with _override(_main_window()):
+        bpy.ops.wm.quit_blender()
+    return None
+
+
+bpy.app.timers.register(tick, first_interval=0.3)
