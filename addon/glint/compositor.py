@@ -20,9 +20,9 @@ from .logic import compositing as cg
 LAYOUT_KEY = "glint_layout"
 
 
-def _layout_hash() -> str:
-    text = repr(sorted(cg.GROUP_NODES.items())) + repr(cg.GROUP_LINKS) + repr(cg.GROUP_OUTPUTS)
-    return hashlib.sha1(text.encode()).hexdigest()[:12]
+# A group saved with another hash (an older description) is rebuilt.
+LAYOUT_HASH = hashlib.sha1((repr(sorted(cg.GROUP_NODES.items())) + repr(cg.GROUP_LINKS) +
+                            repr(cg.GROUP_OUTPUTS)).encode()).hexdigest()[:12]
 
 
 # ----------------------------------------------------------------------------
@@ -101,12 +101,24 @@ def _new_socket(tree, name: str, socket_type: str, in_out: str):
     return sockets.new(socket_type, name)
 
 
+def find_group():
+    """Glint's node group, or None: a compositor group carrying ``LAYOUT_KEY`` (every
+    group Glint builds does), the one named ``GROUP_NAME`` if there are several.
+
+    Not the name alone: node groups of every kind share one name space, and a
+    user's own group called "Glint" (a shader group, say) would otherwise be taken
+    for Glint's, never be current, and be rebuilt beside on every set-up (F12
+    then never gets reflections) and removed when Glint is switched off."""
+    ours = [g for g in bpy.data.node_groups if g.bl_idname == "CompositorNodeTree" and LAYOUT_KEY in g]
+    return next((g for g in ours if g.name == cg.GROUP_NAME), ours[0] if ours else None)
+
+
 def build_group():
     """(Re)build the node group from the description; returns it."""
-    group = bpy.data.node_groups.get(cg.GROUP_NAME)
+    group = find_group()
     if _group_is_current(group):
         return group
-    if group is None or group.bl_idname != "CompositorNodeTree":
+    if group is None:
         group = bpy.data.node_groups.new(cg.GROUP_NAME, "CompositorNodeTree")
     group.nodes.clear()
     if hasattr(group, "interface"):
@@ -134,13 +146,13 @@ def build_group():
         nodes[name] = node
     for src, so, dst, di in cg.GROUP_LINKS:
         group.links.new(nodes[src].outputs[so], nodes[dst].inputs[di])
-    group[LAYOUT_KEY] = _layout_hash()
+    group[LAYOUT_KEY] = LAYOUT_HASH
     return group
 
 
 def update_group(glint) -> None:
     """Push the settings the group reads (blur size, debug switches)."""
-    group = bpy.data.node_groups.get(cg.GROUP_NAME)
+    group = find_group()
     if group is None:
         return
     blur = group.nodes.get("blur")
@@ -174,11 +186,6 @@ def _render_layers_node(tree, scene, view_layer):
     return None
 
 
-def group_node(scene):
-    tree = scene.node_tree if scene.use_nodes else None
-    return tree.nodes.get(cg.GROUP_NODE_NAME) if tree is not None else None
-
-
 def _is_default_tree(tree) -> bool:
     kinds = sorted(n.bl_idname for n in tree.nodes)
     return kinds in (["CompositorNodeComposite", "CompositorNodeRLayers"],
@@ -190,7 +197,7 @@ class SetupIncomplete(Exception):
 
 
 def _group_is_current(group) -> bool:
-    if group is None or group.bl_idname != "CompositorNodeTree" or group.get(LAYOUT_KEY) != _layout_hash():
+    if group is None or group.get(LAYOUT_KEY) != LAYOUT_HASH:  # find_group checked the kind
         return False
     # Every image node still has its image (a user may have deleted one).
     for name, (kind, props, _) in cg.GROUP_NODES.items():
@@ -219,7 +226,7 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         scene.use_nodes = True
         glint.owns_use_nodes = True
     tree = scene.node_tree
-    group = bpy.data.node_groups.get(cg.GROUP_NAME)
+    group = find_group()
     if not _group_is_current(group):
         change("Glint's node group is missing or out of date")
         group = build_group()
@@ -320,7 +327,7 @@ def remove(scene) -> None:
     glint.owns_use_nodes = False
     still_used = any(s.glint.enabled and s != scene for s in bpy.data.scenes)
     if not still_used:
-        group = bpy.data.node_groups.get(cg.GROUP_NAME)
+        group = find_group()
         if group is not None and group.users == 0:
             bpy.data.node_groups.remove(group)
         for name in cg.ALL_IMAGES:

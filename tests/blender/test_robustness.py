@@ -126,6 +126,44 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     assert res["use_nodes_off"] is True and res["group_off"] is False
 
 
+NAME_CLASH = r"""
+import bpy, json
+from glint import compositor
+from glint.logic import compositing as cg
+# A user's own shader node group that happens to be called "Glint" (node groups of
+# every kind share one name space).
+user = bpy.data.node_groups.new(cg.GROUP_NAME, 'ShaderNodeTree')
+user.use_fake_user = True
+user.nodes.new('ShaderNodeMath')
+s = bpy.context.scene
+s.glint.enabled = True
+res = {}
+def compositor_groups():
+    return sorted(g.name for g in bpy.data.node_groups if g.bl_idname == 'CompositorNodeTree')
+res['on'] = compositor_groups()
+try:  # what render_init does on F12's render thread: nothing may be missing now
+    compositor.ensure(s, allow_changes=False)
+    res['render_thread'] = 'ok'
+except compositor.SetupIncomplete as exc:
+    res['render_thread'] = str(exc)
+compositor.ensure(s)
+res['again'] = compositor_groups()
+s.glint.enabled = False
+res['off'] = compositor_groups()
+res['user_group'] = [user.name, user.bl_idname, len(user.nodes)]
+print('CLASH' + json.dumps(res))
+"""
+
+
+def test_a_users_node_group_named_glint_is_left_alone(blender):
+    log = blender.run(["--addons", "glint", "--python-expr", NAME_CLASH])
+    res = json.loads(next(line[5:] for line in log.splitlines() if line.startswith("CLASH")))
+    assert res["render_thread"] == "ok"
+    assert len(res["on"]) == 1 and res["again"] == res["on"]  # one Glint group, not one more per ensure
+    assert res["off"] == []
+    assert res["user_group"] == ["Glint", "ShaderNodeTree", 1]
+
+
 @pytest.mark.parametrize("view", ["VISIBILITY", "REFLECTION"])
 def test_debug_view_renders_the_layer(blender, samples, mirror_off, tmp_path, view):
     out = str(tmp_path / view)
