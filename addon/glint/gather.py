@@ -178,7 +178,7 @@ def _normal_map_of(shader_node) -> Optional[NormalMapRef]:
 
 def material_info(mat) -> Tuple[materials.SpecularSpec, Optional[NormalMapRef]]:
     """The specular spec of a material and its normal map, if any."""
-    hardness = mat.get("hardness") if mat is not None else None
+    hardness = mat.get("hardness")
     if hardness is not None:
         try:
             hardness = float(hardness)
@@ -189,7 +189,7 @@ def material_info(mat) -> Tuple[materials.SpecularSpec, Optional[NormalMapRef]]:
     node, has_output = _surface_node(mat)
     if not has_output:
         return materials.material_spec(_viewport(mat), hardness), None
-    desc = describe_shader(node) if node is not None else {"kind": "none"}
+    desc = describe_shader(node)  # None: a shader Glint does not know
     if desc is None:
         desc = _viewport(mat)
     return materials.material_spec(desc, hardness), _normal_map_of(node)
@@ -325,8 +325,20 @@ def _visible_instance(inst) -> bool:
     return True
 
 
-def _slot_materials(ob) -> List[object]:
-    return [slot.material for slot in ob.material_slots]
+def _instances_in_view(depsgraph, clip_from_world, table: MaterialTable):
+    """(object, object-to-world, material rows of its slots) for every renderable
+    geometry instance; the rows are None when its bounding box lies wholly outside
+    the frustum. The object is valid only until the next step: Blender reuses one
+    temporary object for instances."""
+    for inst in depsgraph.object_instances:
+        if not _visible_instance(inst):
+            continue
+        ob = inst.object
+        m = np.array(inst.matrix_world, dtype=np.float64)
+        if frustum.outside_frustum(clip_from_world @ m, frustum.box_corners(ob.bound_box)):
+            yield ob, m, None
+        else:
+            yield ob, m, [table.index_of(slot.material) for slot in ob.material_slots]
 
 
 def export_scene(depsgraph, progress=None) -> SceneExport:
@@ -342,16 +354,11 @@ def export_scene(depsgraph, progress=None) -> SceneExport:
     candidates = 0
     culled = 0
     any_reflective = False
-    for inst in depsgraph.object_instances:
-        if not _visible_instance(inst):
-            continue
-        ob = inst.object
-        m = np.array(inst.matrix_world, dtype=np.float64)
-        if frustum.outside_frustum(clip_from_world @ m, frustum.box_corners(ob.bound_box)):
+    for _, _, slots in _instances_in_view(depsgraph, clip_from_world, table):
+        if slots is None:
             culled += 1
             continue
         candidates += 1
-        slots = [table.index_of(mat) for mat in _slot_materials(ob)]
         if any(table.reflective(i) for i in slots):
             any_reflective = True
     if progress is not None:
@@ -363,14 +370,9 @@ def export_scene(depsgraph, progress=None) -> SceneExport:
 
     parts: List[geometry.Triangles] = []
     cache: Dict[Tuple[int, Optional[str]], geometry.MeshArrays] = {}
-    for inst in depsgraph.object_instances:
-        if not _visible_instance(inst):
+    for ob, m, slots in _instances_in_view(depsgraph, clip_from_world, table):
+        if slots is None:
             continue
-        ob = inst.object
-        m = np.array(inst.matrix_world, dtype=np.float64)
-        if frustum.outside_frustum(clip_from_world @ m, frustum.box_corners(ob.bound_box)):
-            continue
-        slots = [table.index_of(mat) for mat in _slot_materials(ob)]
         uv_map = None
         for i in slots:
             mi = table.normal_map_of_row[i]
