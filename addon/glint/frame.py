@@ -24,7 +24,8 @@ def settings_dict(glint) -> dict:
     }
 
 
-def _rasterize(core, exp: gather.SceneExport, backend: str):
+def rasterize(core, exp: gather.SceneExport, backend: str):
+    """The G-buffer of an export (with its normal maps, if any) on ``backend``."""
     t = exp.triangles
     kwargs = {}
     if t.uvs is not None and exp.normal_maps:
@@ -84,7 +85,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         requested = settings_logic.backend_name(values["backend"])
         with timings.measure("rasterize"):
             backend = resolve_backend(core, requested)
-            gbuf, used = _with_backend(core, backend, requested, lambda b: _rasterize(core, exp, b))
+            gbuf, used = _with_backend(core, backend, requested, lambda b: rasterize(core, exp, b))
         progress.check()
         position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
         mask = compositing.mask_image(position, specular)

@@ -9,7 +9,7 @@ import bpy
 import numpy as np
 
 from . import compositor, gather, native
-from .frame import settings_dict
+from .frame import rasterize, settings_dict
 from .logic import compositing, settings as settings_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE
@@ -141,22 +141,15 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
         def work():
             # Native stages only: they release the GIL, Blender's UI stays live.
             try:
-                cam = exp.camera
-                t = exp.triangles
-                extra = {}
-                if t.uvs is not None and exp.normal_maps:
-                    extra = dict(uvs=t.uvs, tangents=t.tangents, material_normal_map=exp.material_normal_map,
-                                 normal_maps=exp.normal_maps)
-                proj = cam.projection.astype(np.float32)
                 with timings.measure("rasterize"):
-                    g = core.rasterize(t.positions, t.normals, t.material_index, exp.materials, proj,
-                                       cam.width, cam.height, backend=backend, **extra)
+                    g = rasterize(core, exp, backend)
                 if self._cancel.is_set():
                     return
                 n = compositing.trace_normals(g["normal"], g["position"], g["specular"])
+                proj = exp.camera.projection
                 with timings.measure("trace"):
-                    uv = core.trace(g["position"], n, proj, backend=backend, **kwargs)
-                self._result.update(g, uv=uv, projection=cam.projection)
+                    uv = core.trace(g["position"], n, proj.astype(np.float32), backend=backend, **kwargs)
+                self._result.update(g, uv=uv, projection=proj)
             except Exception as exc:  # reported by the modal loop
                 self._result["error"] = f"{type(exc).__name__}: {exc}"
 
