@@ -1,6 +1,8 @@
 """Add-on preferences: where the native module came from, or why it is missing."""
 from __future__ import annotations
 
+import textwrap
+
 import bpy
 
 from . import native
@@ -16,7 +18,8 @@ class GLINT_AddonPreferences(bpy.types.AddonPreferences):
             box = layout.box()
             box.alert = True
             box.label(text="Glint's native module is missing: renders get no reflections.", icon="ERROR")
-            for line in _wrap(native.error() or "", 90):
+            # Paths stay whole: a line may run long rather than split one.
+            for line in textwrap.wrap(native.error() or "", 90, break_long_words=False, break_on_hyphens=False):
                 box.label(text=line)
         else:
             layout.label(text=f"Native module {getattr(core, '__version__', '?')} loaded from:", icon="CHECKMARK")
@@ -27,19 +30,6 @@ class GLINT_AddonPreferences(bpy.types.AddonPreferences):
                 gl = "unknown"
             layout.label(text=f"OpenGL backend: {gl}")
         layout.operator("glint.retry_native", icon="FILE_REFRESH")
-
-
-def _wrap(text: str, width: int):
-    words, line, lines = text.split(), "", []
-    for w in words:
-        if len(line) + len(w) + 1 > width:
-            lines.append(line)
-            line = w
-        else:
-            line = f"{line} {w}".strip()
-    if line:
-        lines.append(line)
-    return lines
 
 
 CLASSES = (GLINT_AddonPreferences,)

@@ -8,6 +8,7 @@ printing to a log stays cheap and quick work prints nothing.
 """
 from __future__ import annotations
 
+import contextlib
 import time
 from typing import Callable, Dict, Optional
 
@@ -58,19 +59,14 @@ class Timings:
         self._clock = clock
         self.ms: Dict[str, float] = {}
 
+    @contextlib.contextmanager
     def measure(self, name: str):
-        timings = self
-
-        class _Span:
-            def __enter__(self):
-                self.t0 = timings._clock()
-                return self
-
-            def __exit__(self, *exc):
-                timings.ms[name] = timings.ms.get(name, 0.0) + (timings._clock() - self.t0) * 1000.0
-                return False
-
-        return _Span()
+        """Time the ``with`` block (added to earlier spans of the same name)."""
+        t0 = self._clock()
+        try:
+            yield
+        finally:
+            self.ms[name] = self.ms.get(name, 0.0) + (self._clock() - t0) * 1000.0
 
     def total(self) -> float:
         return sum(self.ms.values())
