@@ -27,7 +27,6 @@ CORE_DIR = os.path.join(BUILD, "python")
 SIZE = (160, 90)
 
 
-
 def have_blender():
     return shutil.which(BLENDER) is not None
 
@@ -93,6 +92,49 @@ def read_exr(path, layer=""):
 
 def load_dump(out_dir, frame=1):
     return dict(np.load(os.path.join(out_dir, f"dump_{frame:04d}.npz"), allow_pickle=True))
+
+
+# The mirror_floor sample's objects over its mirror (make_samples.py).
+MIRROR_OBJECTS = ["Red Sphere", "Green Cube", "Blue Cone"]
+
+
+def hull_mask(points_uv, w, h):
+    """Pixels (centres) inside the convex hull of uv points."""
+    pts = np.asarray(points_uv)[:, :2] * (w, h)
+    # Andrew's monotone chain
+    p = sorted(map(tuple, pts))
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower, upper = [], []
+    for q in p:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], q) <= 0:
+            lower.pop()
+        lower.append(q)
+    for q in reversed(p):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], q) <= 0:
+            upper.pop()
+        upper.append(q)
+    hull = np.array(lower[:-1] + upper[:-1])
+    ys, xs = np.mgrid[0:h, 0:w] + 0.5
+    inside = np.ones((h, w), bool)
+    for i in range(len(hull)):
+        a, b = hull[i], hull[(i + 1) % len(hull)]
+        inside &= (b[0] - a[0]) * (ys - a[1]) - (b[1] - a[1]) * (xs - a[0]) >= 0
+    return inside
+
+
+def dilate(mask, r):
+    out = mask.copy()
+    for dy in range(-r, r + 1):
+        for dx in range(-r, r + 1):
+            out |= np.roll(np.roll(mask, dy, 0), dx, 1)
+    return out
+
+
+def erode(mask, r):
+    return ~dilate(~mask, r)
 
 
 # Draws every Glint panel and the preferences into a recording fake layout (no UI in -b),

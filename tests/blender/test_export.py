@@ -39,16 +39,16 @@ s.render.pixel_aspect_y = 1.5
 }
 
 
-def run_check(blender, samples, tmp_path, variant):
-    scene, code = VARIANTS[variant]
-    out = str(tmp_path / f"{variant}.npz")
+def run_check(blender, samples, tmp_path, name, scene, code):
+    """Run export_check.py on sample ``scene`` after ``code``; its numbers by name."""
+    out = str(tmp_path / f"{name}.npz")
     blender.run([samples[scene], "--addons", "glint", "--python", CHECK, "--", out, code])
     return dict(np.load(out))
 
 
 @pytest.mark.parametrize("variant", sorted(VARIANTS))
 def test_projection_and_positions_match_world_to_camera_view(blender, samples, tmp_path, variant):
-    d = run_check(blender, samples, tmp_path, variant)
+    d = run_check(blender, samples, tmp_path, variant, *VARIANTS[variant])
     P, V = d["projection"], d["view"]
     corners = d["positions"].reshape(-1, 3).astype(np.float64)
     # Every exported corner is a world vertex of the scene, carried by the view matrix.
@@ -90,11 +90,7 @@ hidden = bpy.data.objects.new('Hidden', me); hidden.location = (0, 0, 3); hidden
 s.collection.objects.link(hidden)
 bpy.data.objects['Green Cube'].hide_render = True
 """
-    VARIANTS["_extra"] = ("mirror_floor", code)
-    try:
-        d = run_check(blender, samples, tmp_path, "_extra")
-    finally:
-        del VARIANTS["_extra"]
+    d = run_check(blender, samples, tmp_path, "extra", "mirror_floor", code)
     assert int(d["culled"]) == 1  # the triangle behind the camera
     # floor 2 + sphere + cone triangles, no cube (hidden), no 'Hidden', no 'Behind'
     corners = d["positions"].reshape(-1, 3)

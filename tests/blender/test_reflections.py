@@ -7,11 +7,9 @@ import os
 import numpy as np
 import pytest
 
-from glint_blender_helpers import SIZE, core, load_dump, read_exr
+from glint_blender_helpers import MIRROR_OBJECTS, SIZE, core, dilate, erode, hull_mask, load_dump, read_exr
 
 pytestmark = pytest.mark.blender
-
-MIRROR_OBJECTS = ["Red Sphere", "Green Cube", "Blue Cone"]
 
 
 @pytest.fixture(scope="module")
@@ -22,41 +20,6 @@ def mirror_on(blender, samples, session_dir):
         "wtcv_points": {"sphere_mirror": [[0.0, 0.0, -1.0]], "sphere": [[0.0, 0.0, 1.0]]},
         "mirror_objects": MIRROR_OBJECTS})
     return out, log
-
-
-def hull_mask(points_uv, w, h):
-    """Pixels (centres) inside the convex hull of uv points."""
-    pts = np.asarray(points_uv)[:, :2] * (w, h)
-    # Andrew's monotone chain
-    p = sorted(map(tuple, pts))
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lower, upper = [], []
-    for q in p:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], q) <= 0:
-            lower.pop()
-        lower.append(q)
-    for q in reversed(p):
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], q) <= 0:
-            upper.pop()
-        upper.append(q)
-    hull = np.array(lower[:-1] + upper[:-1])
-    ys, xs = np.mgrid[0:h, 0:w] + 0.5
-    inside = np.ones((h, w), bool)
-    for i in range(len(hull)):
-        a, b = hull[i], hull[(i + 1) % len(hull)]
-        inside &= (b[0] - a[0]) * (ys - a[1]) - (b[1] - a[1]) * (xs - a[0]) >= 0
-    return inside
-
-
-def dilate(mask, r):
-    out = mask.copy()
-    for dy in range(-r, r + 1):
-        for dx in range(-r, r + 1):
-            out |= np.roll(np.roll(mask, dy, 0), dx, 1)
-    return out
 
 
 def test_red_sphere_turns_the_mirror_red_below_it(mirror_on, mirror_off):
@@ -74,10 +37,6 @@ def test_red_sphere_turns_the_mirror_red_below_it(mirror_on, mirror_off):
     assert patch_on[0] > 2.0 * patch_on[1] and patch_on[0] > 2.0 * patch_on[2], patch_on
     assert patch_on[0] > patch_off[0] + 0.05, (patch_on, patch_off)
     assert not (patch_off[0] > 2.0 * patch_off[1]), patch_off  # without Glint the floor is not red there
-
-
-def erode(mask, r):
-    return ~dilate(~mask, r)
 
 
 def test_reflections_appear_nowhere_else(mirror_on, mirror_off):

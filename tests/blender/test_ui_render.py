@@ -21,14 +21,13 @@ import uuid
 import numpy as np
 import pytest
 
-from glint_blender_helpers import BLENDER, HERE, ROOT, SIZE, Blender, core
-from test_reflections import dilate, erode, hull_mask
+from glint_blender_helpers import (BLENDER, HERE, MIRROR_OBJECTS, ROOT, SIZE, Blender, core, dilate, erode,
+                                   hull_mask)
 
 pytestmark = pytest.mark.blender
 
 XVFB_RUN = shutil.which("xvfb-run")
 UI_DRIVER = os.path.join(HERE, "ui_driver.py")
-MIRROR_OBJECTS = ["Red Sphere", "Green Cube", "Blue Cone"]
 PILLARS = [f"Pillar {i}" for i in range(4)]
 
 
