@@ -144,7 +144,8 @@ void main() {
     }
     // The range spans at most (size + 2) * resolution + 2 samples along the
     // major axis (one sample per 1 / resolution pixels); counting with an int
-    // from k0 keeps the loop finite even where k0 is beyond 2^53.
+    // from k0, capped like the CPU loop, keeps the loop finite even where k0
+    // is beyond 2^53 or the increment is NaN (inf / inf).
     int count = k1 >= k0 ? int(min(k1 - k0 + 1.0lf, double(max(u_size.x, u_size.y)) + 8.0lf)) : 0;
     for (int i = 0; i < count; ++i) {
       float kf = float(k0 + double(i));

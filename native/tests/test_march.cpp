@@ -112,3 +112,30 @@ TEST(SeedMarch, ExtremesStayFiniteAndInRange) {
     }
   }
 }
+
+TEST(SeedMarch, RayWhoseEndsProjectAFloatRangeApartEnds) {
+  // A point 1e-29 in front of a 1e-30 near plane, 1e8 to the right, whose
+  // normal turns the view ray back to the left: the start projects to
+  // x ~ +3e38 pixels and the end to x ~ -1e38, so delta_x overflows to -inf
+  // and the increment is -inf / inf = NaN. No sample is on the image, and
+  // the last one is NaN, so the seed reports nothing (FIX 4) -- promptly.
+  const int w = 64, h = 64;
+  const double near = 1e-30, far = 10.0;
+  Mat4 P;
+  P(0, 0) = 1.0;
+  P(1, 1) = 1.0;
+  P(2, 2) = -(far + near) / (far - near);
+  P(2, 3) = -2.0 * far * near / (far - near);
+  P(3, 2) = -1.0;
+  Image pos(w, h), nrm(w, h);
+  float* p = pos.px(32, 32);
+  p[0] = 1e8f;
+  p[2] = -1e-29f;
+  p[3] = 1.0f;
+  nrm.px(32, 32)[0] = 1.0f;
+  TraceOptions o;
+  o.max_distance = 2e8f;
+  auto cpu = make_cpu_backend(1);
+  Image uv = cpu->trace({pos, nrm, nullptr, P}, o);
+  for (float v : uv.data) ASSERT_EQ(v, 0.0f);
+}

@@ -4,6 +4,7 @@
 // FIX n below, plus work skipping that cannot change the result (marked SKIP).
 #include "march.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -304,8 +305,15 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
       const float kf = static_cast<float>(k0 - 1);
       search0 = search_of(start_frag[0] + kf * inc_x, start_frag[1] + kf * inc_y);
     }
-    for (int64_t k = k0; k <= k1; ++k) {
-      const float kf = static_cast<float>(k);
+    // At most (size + 2) * resolution + 2 samples fall on the image, so the
+    // cap below never binds for a finite ray. It is there, as in the shader,
+    // for an increment of inf / inf = NaN (a ray whose two ends project
+    // ~1e38 pixels apart): onscreen_range() cannot narrow a NaN line, and
+    // probing int(delta) ~ 4e18 of its samples would never end.
+    const int64_t side = pos.width > pos.height ? pos.width : pos.height;
+    const int64_t count = k1 >= k0 ? std::min<int64_t>(k1 - k0 + 1, side + 8) : 0;
+    for (int64_t i = 0; i < count; ++i) {
+      const float kf = static_cast<float>(k0 + i);
       frag[0] = start_frag[0] + kf * inc_x;
       frag[1] = start_frag[1] + kf * inc_y;
       uv[0] = frag[0] / tex_w;
