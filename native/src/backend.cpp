@@ -4,6 +4,7 @@
 #include <mutex>
 
 #include "glint/errors.h"
+#include "glint/options.h"
 
 namespace glint {
 
@@ -16,11 +17,7 @@ bool gl_compiled_in() {
 }
 
 std::shared_ptr<Backend> get_backend(const std::string& name, int threads) {
-  // Checked here, where every caller passes through: a negative count would
-  // silently mean "all cores" and a huge one start a thread per image row.
-  if (threads < 0 || threads > 1024)
-    throw InvalidArgument("threads", "expected 0 (all hardware threads) to 1024, got " +
-                                         std::to_string(threads));
+  validate_threads(threads);  // here, where every caller passes through
   if (name == "cpu") {
     // The CPU backend is stateless apart from its thread count: cache one per count.
     static std::mutex mu;

@@ -369,9 +369,7 @@ void write_exr(const std::string& path, const std::map<std::string, Image>& laye
 }
 
 void set_exr_threads(int threads) {
-  if (threads < 0 || threads > 1024)
-    throw InvalidArgument("threads", "expected 0 (all hardware threads) to 1024, got " +
-                                         std::to_string(threads));
+  validate_threads(threads);
   if (threads == 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   Imf::setGlobalThreadCount(threads);
 }

@@ -46,9 +46,14 @@ void validate(const BlurOptions& o) {
 void validate(const PipelineOptions& o) {
   validate(o.trace);
   validate(o.blur);
-  if (o.threads < 0 || o.threads > 1024) {
-    throw InvalidArgument("threads", "expected 0 (all hardware threads) to 1024, got " +
-                                         std::to_string(o.threads));
+  validate_threads(o.threads);
+}
+
+void validate_threads(int threads) {
+  if (threads < 0 || threads > kMaxThreads) {
+    throw InvalidArgument("threads", "expected 0 (all hardware threads) to " +
+                                         std::to_string(kMaxThreads) + ", got " +
+                                         std::to_string(threads));
   }
 }
 

@@ -1,10 +1,20 @@
-// Blur, reflection and combine against plain formulas written out here.
+// Blur, reflection and combine against plain formulas written out here,
+// and the CPU backend's row-parallel loop.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <vector>
 
 #include "analytic_scene.h"
+#include "cpu/parallel.h"
 #include "glint/pipeline.h"
 
 using namespace glint;
@@ -137,4 +147,69 @@ TEST(Pipeline, MirrorOnlySceneSkipsTheBlur) {
   for (const auto& t : r.timings)
     if (t.stage == "box_blur") blur_skipped = t.skipped;
   EXPECT_TRUE(blur_skipped);
+}
+
+TEST(Pipeline, NonFiniteShininessIsSmoothWhenDecidingOnTheBlur) {
+  // The reflection stage reads a non-finite shininess as 1 (roughness 0), so
+  // such a pixel never reads the blur and must not make the pipeline run it.
+  test::Scene s = test::mirror_floor_scene();
+  s.spheres[1].specular = 0.0f;  // the only rough reflector
+  auto g = test::render(s, perspective(1.0, 1.5, 0.1, 100), 48, 32);
+  int broken = 0;
+  for (int y = 0; y < g.specular.height; ++y)
+    for (int x = 0; x < g.specular.width; ++x)
+      if (broken < 2 && is_reflective(g.specular.px(x, y)) && g.position.px(x, y)[3] > 0.0f)
+        g.specular.px(x, y)[3] = broken++ ? NAN : -INFINITY;
+  ASSERT_EQ(broken, 2);
+  auto cpu = make_cpu_backend(2);
+  PipelineResult r = run_pipeline(*cpu, {g.position, g.normal, g.specular, g.color, g.projection}, {});
+  EXPECT_EQ(r.rough_pixels, 0u);
+  for (const auto& t : r.timings)
+    if (t.stage == "box_blur") EXPECT_TRUE(t.skipped);
+}
+
+// parallel_rows is the CPU backend's only thread machinery; these pin down
+// what happens when a body throws or a thread cannot be started.
+TEST(ParallelRows, AnExceptionInABodyReachesTheCaller) {
+  for (int threads : {1, 4}) {
+    std::atomic<int> done{0};
+    EXPECT_THROW(cpu::parallel_rows(0, 200, threads,
+                                    [&](int y) {
+                                      if (y == 37) throw std::runtime_error("row 37");
+                                      ++done;
+                                    }),
+                 std::runtime_error)
+        << threads << " threads";
+    EXPECT_LT(done.load(), 200);
+  }
+}
+
+TEST(ParallelRows, EveryRowRunsOnceWhenThreadsCannotBeStarted) {
+  // In a child process whose address space has no room for another thread
+  // stack (8 MiB), starting threads fails with EAGAIN; the rows must still
+  // all run, once each, on the threads that exist.
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::vector<int> hits(5000, 0);  // allocated before the limit
+    long vm_kib = 0;
+    if (FILE* f = std::fopen("/proc/self/status", "r")) {
+      char line[256];
+      while (std::fgets(line, sizeof line, f))
+        if (std::sscanf(line, "VmSize: %ld", &vm_kib) == 1) break;
+      std::fclose(f);
+    }
+    if (vm_kib <= 0) _exit(3);
+    const rlim_t limit = static_cast<rlim_t>(vm_kib + 2048) * 1024;  // 2 MiB to spare
+    const rlimit r{limit, limit};
+    if (setrlimit(RLIMIT_AS, &r) != 0) _exit(4);
+    cpu::parallel_rows(0, 5000, 64, [&](int y) { ++hits[y]; });
+    for (int v : hits)
+      if (v != 1) _exit(2);
+    _exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
 }

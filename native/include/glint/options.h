@@ -41,6 +41,10 @@ struct PipelineOptions {
 void validate(const TraceOptions& o);
 void validate(const BlurOptions& o);
 void validate(const PipelineOptions& o);
+// A worker-thread count: 0 (one per hardware thread) to kMaxThreads. Checked
+// wherever a count comes in, since a negative one would silently mean "all
+// cores" and a huge one start a thread per image row.
+void validate_threads(int threads);
 
 // Name <-> enum, for the bindings, the CLI and EXR headers.
 March parse_march(const std::string& name);      // "seed" | "linear"
@@ -54,5 +58,6 @@ constexpr double kMaxDistanceLimit = 1e12;  // past this float32 view positions 
 constexpr int kMaxBlurSize = 128;
 constexpr float kMaxBlurSeparation = 64.0f;
 constexpr int kMaxImageSide = 32768;
+constexpr int kMaxThreads = 1024;
 
 }  // namespace glint

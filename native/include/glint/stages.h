@@ -22,9 +22,13 @@ namespace glint {
 // Specular amount and roughness of one specular-buffer pixel, as the seed's
 // reflection pass defines them. Shared so every backend and test agrees.
 inline float specular_amount(const float* spec) { return (spec[0] + spec[1] + spec[2]) / 3.0f; }
+// Roughness = 1 - clamp(shininess, 0, 1): the seed's 1 - min(a, 1) would let
+// a negative value extrapolate past the blurred colour. A non-finite
+// shininess counts as 1 (smooth), in the reflection stage and in deciding
+// whether the blur is needed alike.
 inline float roughness_of(const float* spec) {
-  float s = spec[3] < 1.0f ? spec[3] : 1.0f;
-  return 1.0f - s;
+  const float s = spec[3] - spec[3] == 0.0f ? spec[3] : 1.0f;
+  return 1.0f - (s < 0.0f ? 0.0f : (s > 1.0f ? 1.0f : s));
 }
 // A pixel is reflective when its specular amount is positive (and finite).
 bool is_reflective(const float* spec);
@@ -72,5 +76,7 @@ std::unique_ptr<Backend> make_cpu_backend(int threads = 0);
 // Check a buffer's size and that it is non-empty; the name goes in the error.
 void require_image(const Image& img, const char* name);
 void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name);
+// Everything Backend::trace checks before it runs: buffer sizes, options, projection.
+void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt);
 
 }  // namespace glint

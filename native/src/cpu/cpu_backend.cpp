@@ -109,11 +109,7 @@ class CpuBackend final : public Backend {
   std::string name() const override { return "cpu"; }
 
   Image trace(const TraceInputs& in, const TraceOptions& opt) override {
-    require_image(in.position, "position");
-    require_same_size(in.position, "position", in.normal, "normal");
-    if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
-    validate(opt);
-    validate_projection(in.projection);
+    require_trace_inputs(in, opt);
     Image out(in.position.width, in.position.height);
     std::vector<float> view_distance(in.position.pixel_count());
     cpu::parallel_rows(0, in.position.height, threads_, [&](int y) {
@@ -241,9 +237,7 @@ class CpuBackend final : public Backend {
         const float* s = specular.px(x, y);
         if (!is_reflective(s)) continue;
         const float amount = specular_amount(s);
-        // Shininess outside [0, 1] is clamped: the seed's 1 - min(a, 1) would
-        // let a negative value extrapolate past the blurred colour.
-        const float roughness = 1.0f - clamp01(s[3] - s[3] == 0.0f ? s[3] : 1.0f);
+        const float roughness = roughness_of(s);
         const float* c = color.px(x, y);
         const float* b = blurred.px(x, y);
         float* o = out.px(x, y);
@@ -310,6 +304,14 @@ void require_same_size(const Image& a, const char* a_name, const Image& b, const
                                       std::to_string(a.width) + "x" + std::to_string(a.height) +
                                       "), got " + std::to_string(b.width) + "x" +
                                       std::to_string(b.height));
+}
+
+void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
+  require_image(in.position, "position");
+  require_same_size(in.position, "position", in.normal, "normal");
+  if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
+  validate(opt);
+  validate_projection(in.projection);
 }
 
 std::unique_ptr<Backend> make_cpu_backend(int threads) {

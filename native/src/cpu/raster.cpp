@@ -21,7 +21,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <limits>
 
 #include "glint/errors.h"
@@ -413,18 +412,7 @@ GBufferImages rasterize(const RasterInputs& in, int threads) {
         }
       }
     };
-    // Binning allocates; a failure must reach the caller, not end a worker
-    // thread (which would terminate the process).
-    std::vector<std::exception_ptr> failed(slices);
-    parallel_rows(0, slices, threads, [&](int s) {
-      try {
-        setup_slice(s);
-      } catch (...) {
-        failed[s] = std::current_exception();
-      }
-    });
-    for (const auto& e : failed)
-      if (e) std::rethrow_exception(e);
+    parallel_rows(0, slices, threads, setup_slice);  // binning allocates: failures come back here
     parallel_rows(0, bands, threads, [&](int band) {
       const int r0 = band * band_rows, r1 = std::min(height, r0 + band_rows) - 1;
       for (const Slice& sl : slice) {

@@ -312,11 +312,12 @@ class GlState {
     gl_.Uniform1i(loc(prog, sampler), unit);
   }
 
-  // fullscreen.vert + `frag`, compiled on first use and kept.
-  GLuint program(const std::string& frag) {
+  // `vert` + `frag`, compiled on first use and kept (every fragment shader
+  // is used with one vertex shader only).
+  GLuint program(const std::string& frag, const char* vert = "fullscreen.vert") {
     auto it = programs_.find(frag);
     if (it != programs_.end()) return it->second;
-    const GLuint p = link_program(gl_, {"fullscreen.vert", frag});
+    const GLuint p = link_program(gl_, {vert, frag});
     programs_[frag] = p;
     return p;
   }
@@ -381,12 +382,16 @@ class GlState {
   GLuint buffers_[6] = {0, 0, 0, 0, 0, 0};  // positions, normals, uvs, tangents, triangle material, material table
   std::vector<GLuint> normal_map_textures_;
 
-  void release_raster() {
+  void release_raster_targets() {
     if (raster_.fbo) gl_.DeleteFramebuffers(1, &raster_.fbo);
     if (raster_.depth) gl_.DeleteRenderbuffers(1, &raster_.depth);
     for (GLuint& c : raster_.color)
       if (c) gl_.DeleteTextures(1, &c);
     raster_ = RasterTargets{};
+  }
+
+  void release_raster() {
+    release_raster_targets();
     if (raster_vao_) gl_.DeleteVertexArrays(1, &raster_vao_);
     raster_vao_ = 0;
     for (GLuint& b : buffers_)
@@ -410,11 +415,7 @@ class GlState {
 
 void GlState::raster_targets(int w, int h) {
   if (raster_.fbo && raster_.w == w && raster_.h == h) return;
-  if (raster_.fbo) gl_.DeleteFramebuffers(1, &raster_.fbo);
-  if (raster_.depth) gl_.DeleteRenderbuffers(1, &raster_.depth);
-  for (GLuint& c : raster_.color)
-    if (c) gl_.DeleteTextures(1, &c);
-  raster_ = RasterTargets{};
+  release_raster_targets();
   const ContextInfo& ci = info();
   if (w > ci.max_renderbuffer_size || h > ci.max_renderbuffer_size) {
     throw Error("glint GL: " + size_text(w, h) + " is larger than this OpenGL's depth buffers allow (" +
@@ -630,13 +631,7 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   }
 
   // --- the pass ----------------------------------------------------------------
-  const GLuint prog = [&] {
-    auto it = programs_.find("gbuffer");
-    if (it != programs_.end()) return it->second;
-    const GLuint p = link_program(gl_, {"gbuffer.vert", "gbuffer.frag"});
-    programs_["gbuffer"] = p;
-    return p;
-  }();
+  const GLuint prog = program("gbuffer.frag", "gbuffer.vert");
   gl_.UseProgram(prog);
   float pf[16];
   for (int i = 0; i < 16; ++i) pf[i] = static_cast<float>(in.projection.m[i]);
@@ -809,11 +804,7 @@ class GlBackend final : public Backend {
   const std::string& description() const { return description_; }
 
   Image trace(const TraceInputs& in, const TraceOptions& opt) override {
-    require_image(in.position, "position");
-    require_same_size(in.position, "position", in.normal, "normal");
-    if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
-    validate(opt);
-    validate_projection(in.projection);
+    require_trace_inputs(in, opt);
     Image out;
     worker_.run([&](GlState& s) { out = s.trace(in, opt); });
     return out;
