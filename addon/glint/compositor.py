@@ -70,6 +70,13 @@ def fill_images(images: Dict[str, np.ndarray]) -> None:
             _filled.add(name)
 
 
+def forget_filled() -> None:
+    """A newly loaded file may hold packed pixels in Glint's images: the next
+    clear must zero them all, not only the ones this session wrote."""
+    global _filled
+    _filled = None
+
+
 def clear_images() -> None:
     """Zero the Glint images that hold a frame: with a zero mask the group passes
     the render through unchanged (out = base * 1 + 0), so a frame Glint cannot

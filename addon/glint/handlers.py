@@ -218,6 +218,7 @@ def on_render_end(scene, *args):
 def on_load_post(*args):
     # Files made elsewhere (or saved before the group changed) get their
     # compositor set up on load; update callbacks do not run on load.
+    compositor.forget_filled()
     for scene in bpy.data.scenes:
         if _enabled(scene):
             try:
