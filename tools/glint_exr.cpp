@@ -20,6 +20,7 @@
 #include "glint/backend.h"
 #include "glint/errors.h"
 #include "glint/exr.h"
+#include "glint/marches.h"
 #include "glint/pipeline.h"
 #include "glint/png.h"
 
@@ -51,9 +52,9 @@ Projection (default: the input's glintProjection header attribute):
 Pipeline:
   --max-distance F        longest reflected ray, view units      [15]
   --resolution F          coarse-pass share of pixels, 0..1      [0.3]
-  --steps N               bisection (seed) / march (linear) steps [10]
+  --steps N               iteration budget; per march, below      [10]
   --thickness F           hit depth tolerance, view units        [0.5]
-  --march seed|linear                                            [seed]
+  --march NAME            one of the marches below               [seed]
   --blur-size N           box half-width in taps, 0 = no blur    [8]
   --blur-separation F     pixels between taps, >= 1              [1]
   --combine over|seed                                            [over]
@@ -69,6 +70,19 @@ OUTPUT.exr may be left out when --png is given. Per-stage timings are printed
 to stdout. Example:
   glint-exr --perspective 50,0.1,100 --png out.png gbuffer.exr out.exr
 )";
+
+// The marches and what each option means for them, from the core's table.
+void print_marches() {
+  std::printf("\nMarches (--march):\n");
+  for (const glint::MarchInfo& m : glint::march_table()) {
+    std::printf("  %-8s %s\n", m.name, m.description);
+    for (const glint::MarchKnob& k : m.knobs) {
+      std::string flag = k.option;  // keyword names; flags spell _ as -
+      std::replace(flag.begin(), flag.end(), '_', '-');
+      std::printf("             --%s: %s\n", flag.c_str(), k.meaning);
+    }
+  }
+}
 
 // A bad command line: message for stderr, exit status 2.
 struct UsageError {
@@ -168,8 +182,13 @@ Args parse_args(int argc, char** argv, bool& help) {
     else if (flag == "--thickness") a.opt.trace.thickness = static_cast<float>(parse_double(flag, next()));
     else if (flag == "--march") {
       const std::string v = next();
-      if (v != "seed" && v != "linear") throw UsageError{flag + ": expected seed or linear, got \"" + v + "\""};
-      a.opt.trace.march = glint::parse_march(v);
+      try {
+        a.opt.trace.march = glint::parse_march(v);
+      } catch (const glint::InvalidArgument&) {
+        throw UsageError{flag + ": expected one of " + glint::march_names() + ", got \"" + v + "\""};
+      }
+      if (glint::march_info(a.opt.trace.march).needs_mesh)
+        throw UsageError{flag + " " + v + ": that march needs the scene's triangles, which an EXR does not hold"};
     } else if (flag == "--blur-size") a.opt.blur.size = parse_int(flag, next());
     else if (flag == "--blur-separation") a.opt.blur.separation = static_cast<float>(parse_double(flag, next()));
     else if (flag == "--combine") {
@@ -344,6 +363,7 @@ int main(int argc, char** argv) {
     args = parse_args(argc, argv, help);
     if (help) {
       std::fputs(kUsage, stdout);
+      print_marches();
       return 0;
     }
   } catch (const UsageError& e) {

@@ -77,4 +77,27 @@ Mat4 projection_from_array(const pyb::handle& obj) {
   return m;
 }
 
+std::optional<TriangleMesh> mesh_from_arg(const pyb::handle& obj) {
+  if (obj.is_none()) return std::nullopt;
+  if (!pyb::isinstance<pyb::tuple>(obj) || pyb::len(obj) != 2)
+    throw InvalidArgument("mesh", "expected a tuple (vertices, triangles), got " +
+                                      pyb::str(pyb::type::of(obj).attr("__name__")).cast<std::string>());
+  pyb::tuple t = pyb::reinterpret_borrow<pyb::tuple>(obj);
+  pyb::array v = as_array(t[0], "mesh");
+  pyb::array f = as_array(t[1], "mesh");
+  if (!v.dtype().is(pyb::dtype::of<float>()) || v.ndim() != 2 || v.shape(1) != 3)
+    throw InvalidArgument("mesh", "expected vertices float32 of shape (N, 3), got " + dtype_of(v) +
+                                      " " + shape_of(v));
+  if (!f.dtype().is(pyb::dtype::of<int32_t>()) || f.ndim() != 2 || f.shape(1) != 3)
+    throw InvalidArgument("mesh", "expected triangles int32 of shape (M, 3), got " + dtype_of(f) +
+                                      " " + shape_of(f));
+  auto vc = pyb::array_t<float, pyb::array::c_style | pyb::array::forcecast>::ensure(v);
+  auto fc = pyb::array_t<int32_t, pyb::array::c_style | pyb::array::forcecast>::ensure(f);
+  TriangleMesh m;
+  m.vertices.assign(vc.data(), vc.data() + vc.size());
+  m.triangles.assign(fc.data(), fc.data() + fc.size());
+  validate(m);
+  return m;
+}
+
 }  // namespace glint::py

@@ -3,9 +3,11 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <optional>
 #include <string>
 
 #include "glint/image.h"
+#include "glint/mesh.h"
 #include "glint/projection.h"
 
 namespace glint::py {
@@ -19,6 +21,9 @@ Image image_from_array(const pyb::handle& obj, const char* name, float fill_alph
                        int min_channels = 3);
 // An RGBA Image as a new float32 [H, W, 4] array.
 pyb::array_t<float> array_from_image(const Image& img);
+// None, or (vertices float32 [N, 3], triangles int32 [M, 3]) as a validated
+// mesh; anything else raises ValueError naming `mesh`.
+std::optional<TriangleMesh> mesh_from_arg(const pyb::handle& obj);
 // A 4x4 float32/float64 array (rows as printed) as a validated Mat4.
 Mat4 projection_from_array(const pyb::handle& obj);
 

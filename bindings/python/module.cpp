@@ -4,10 +4,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+
 #include "convert.h"
 #include "glint/backend.h"
 #include "glint/errors.h"
+#include "glint/marches.h"
+#include "glint/mesh.h"
 #include "glint/pipeline.h"
+#include "glint/presets.h"
 
 namespace pyb = pybind11;
 using namespace pybind11::literals;
@@ -31,22 +36,73 @@ TraceOptions trace_options(float max_distance, float resolution, int steps, floa
   return o;
 }
 
+// An optional image argument: None, or an array of the position buffer's size.
+std::optional<Image> optional_image(const pyb::handle& obj, const char* name, const Image& like) {
+  if (obj.is_none()) return std::nullopt;
+  Image img = image_from_array(obj, name, 1.0f, 4);
+  require_same_size(like, "position", img, name);
+  return img;
+}
+
 pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& normal,
                              const pyb::handle& projection, float max_distance, float resolution,
                              int steps, float thickness, const std::string& march,
+                             const pyb::handle& back_position, const pyb::handle& mesh,
                              const std::string& backend, int threads) {
   const Image pos = image_from_array(position, "position", 1.0f, 4);
   const Image nrm = image_from_array(normal, "normal", 0.0f, 3);
   require_same_size(pos, "position", nrm, "normal");
   const Mat4 proj = projection_from_array(projection);
   const TraceOptions opt = trace_options(max_distance, resolution, steps, thickness, march);
+  const std::optional<Image> back = optional_image(back_position, "back_position", pos);
+  const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
   auto be = get_backend(backend, threads);
+  TraceInputs in{pos, nrm, nullptr, proj};
+  in.back_position = back ? &*back : nullptr;
+  in.mesh = tris ? &*tris : nullptr;
   Image uv;
   {
     pyb::gil_scoped_release release;
-    uv = be->trace(TraceInputs{pos, nrm, nullptr, proj}, opt);
+    uv = be->trace(in, opt);
   }
   return array_from_image(uv);
+}
+
+pyb::dict py_marches() {
+  pyb::dict out;
+  for (const MarchInfo& m : march_table()) out[m.name] = m.description;
+  return out;
+}
+
+pyb::dict py_march_details() {
+  pyb::dict out;
+  for (const MarchInfo& m : march_table()) {
+    pyb::dict knobs;
+    for (const MarchKnob& k : m.knobs) knobs[k.option] = k.meaning;
+    out[m.name] = pyb::dict("description"_a = m.description, "options"_a = knobs,
+                            "needs_mesh"_a = m.needs_mesh,
+                            "uses_back_position"_a = m.uses_back_position,
+                            "gl"_a = m.gl_program != nullptr);
+  }
+  return out;
+}
+
+pyb::dict trace_kwargs(const TraceOptions& o) {
+  return pyb::dict("max_distance"_a = o.max_distance, "resolution"_a = o.resolution,
+                   "steps"_a = o.steps, "thickness"_a = o.thickness,
+                   "march"_a = march_info(o.march).name);
+}
+
+pyb::dict py_presets() {
+  pyb::dict out;
+  for (const Preset& p : presets()) out[p.name] = trace_kwargs(p.trace);
+  return out;
+}
+
+pyb::dict py_preset_descriptions() {
+  pyb::dict out;
+  for (const Preset& p : presets()) out[p.name] = p.description;
+  return out;
 }
 
 pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
@@ -54,6 +110,7 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
                       const pyb::handle& projection, float max_distance, float resolution,
                       int steps, float thickness, const std::string& march, int blur_size,
                       float blur_separation, const std::string& combine,
+                      const pyb::handle& back_position, const pyb::handle& mesh,
                       const std::string& backend, int threads) {
   PipelineInputs in;
   in.position = image_from_array(position, "position", 1.0f, 4);
@@ -61,6 +118,10 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
   in.specular = image_from_array(specular, "specular", 0.0f, 4);
   in.color = image_from_array(color, "color", 1.0f, 3);
   in.projection = projection_from_array(projection);
+  if (std::optional<Image> back = optional_image(back_position, "back_position", in.position))
+    in.back_position = std::move(*back);
+  const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
+  in.mesh = tris ? &*tris : nullptr;
   PipelineOptions opt;
   opt.trace = trace_options(max_distance, resolution, steps, thickness, march);
   opt.blur.size = blur_size;
@@ -117,15 +178,25 @@ PYBIND11_MODULE(glint_core, m) {
 
   m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
         "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
-        "march"_a = "seed", "backend"_a = "cpu", "threads"_a = 0,
+        "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
+        "backend"_a = "cpu", "threads"_a = 0,
         "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
         "max_distance and thickness are view-space units; resolution in [0, 1];\n"
-        "march = 'seed' (two-pass) or 'linear' (the book's older march).");
+        "march: a name from marches(). back_position: optional float32 [H, W, 4], the\n"
+        "surface behind each pixel (w = 0 where none), read by marches that use true\n"
+        "thickness. mesh: (vertices float32 [N, 3], triangles int32 [M, 3]) in the same\n"
+        "view space, for marches that trace the scene's triangles ('exact').");
+  m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");
+  m.def("march_details", &py_march_details,
+        "{name: {description, options: {keyword: meaning}, needs_mesh, uses_back_position, gl}}.");
+  m.def("presets", &py_presets, "{name: trace() keyword arguments} of every preset.");
+  m.def("preset_descriptions", &py_preset_descriptions, "{name: one line on what it measured}.");
 
   m.def("pipeline", &py_pipeline, "position"_a, "normal"_a, "specular"_a, "color"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10,
         "thickness"_a = 0.5f, "march"_a = "seed", "blur_size"_a = 8, "blur_separation"_a = 1.0f,
-        "combine"_a = "over", "backend"_a = "cpu", "threads"_a = 0,
+        "combine"_a = "over", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
+        "backend"_a = "cpu", "threads"_a = 0,
         "The whole pipeline. Returns a dict of float32 [H, W, 4] layers named by LAYERS\n"
         "('uv', 'reflection_color', 'reflection_blur', 'reflection', 'combined') and\n"
         "'stats': backend used, per-stage timings_ms, skipped stages, pixel counts.");

@@ -57,19 +57,12 @@ void validate_threads(int threads) {
   }
 }
 
-March parse_march(const std::string& name) {
-  if (name == "seed") return March::Seed;
-  if (name == "linear") return March::Linear;
-  throw InvalidArgument("march", "expected \"seed\" or \"linear\", got \"" + name + "\"");
-}
-
 Combine parse_combine(const std::string& name) {
   if (name == "over") return Combine::Over;
   if (name == "seed") return Combine::Seed;
   throw InvalidArgument("combine", "expected \"over\" or \"seed\", got \"" + name + "\"");
 }
 
-const char* to_string(March m) { return m == March::Seed ? "seed" : "linear"; }
 const char* to_string(Combine c) { return c == Combine::Over ? "over" : "seed"; }
 
 }  // namespace glint

@@ -102,6 +102,8 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
 
   t0 = Clock::now();
   TraceInputs tin{in.position, in.normal, &in.specular, in.projection};
+  tin.back_position = in.back_position.empty() ? nullptr : &in.back_position;
+  tin.mesh = in.mesh;
   Image uv = backend.trace(tin, opt.trace);
   res.timings.push_back({"trace", ms_since(t0), false});
 

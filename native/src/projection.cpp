@@ -42,6 +42,25 @@ void validate_projection(const Mat4& p) {
   }
 }
 
+Mat4 inverse(const Mat4& a) {
+  // Adjugate over the determinant: a 4x4 needs nothing cleverer, and double
+  // keeps a 1e-4 / 1e7 near/far pair's digits.
+  const double d = det4(a);
+  Mat4 inv;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      int rows[3], cols[3], kr = 0, kc = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != c) rows[kr++] = i;  // transposed: cofactor of (c, r)
+        if (i != r) cols[kc++] = i;
+      }
+      const double minor = det3(a, rows[0], rows[1], rows[2], cols[0], cols[1], cols[2]);
+      inv(r, c) = ((r + c) % 2 ? -minor : minor) / d;
+    }
+  }
+  return inv;
+}
+
 ProjectionKind classify_projection(const Mat4& p) {
   if (p(3, 0) == 0.0 && p(3, 1) == 0.0 && p(3, 2) == -1.0 && p(3, 3) == 0.0)
     return ProjectionKind::Perspective;

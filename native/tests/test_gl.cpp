@@ -17,6 +17,7 @@
 
 #include "analytic_scene.h"
 #include "gl/egl_context.h"
+#include "glint/marches.h"
 #include "gl/gl_backend.h"
 #include "gl/program.h"
 #include "glint/backend.h"
@@ -212,7 +213,9 @@ TEST(GlParity, TraceMatchesTheCpuOnPerspectiveAndOrthographicScenes) {
   auto cpu = make_cpu_backend();
   for (bool ortho : {false, true}) {
     const test::GBuffer g = scene(ortho, 160, 90);
-    for (March m : {March::Seed, March::Linear}) {
+    for (const MarchInfo& info : march_table()) {
+      if (info.needs_mesh) continue;
+      const March m = info.id;
       TraceOptions o;
       o.march = m;
       for (bool gated : {false, true}) {

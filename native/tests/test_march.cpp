@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "analytic_scene.h"
+#include "glint/marches.h"
 #include "glint/stages.h"
 
 using namespace glint;
@@ -90,7 +91,9 @@ TEST(SeedMarch, ExtremesStayFiniteAndInRange) {
     g.normal.px(4, 3)[0] = g.normal.px(4, 3)[1] = g.normal.px(4, 3)[2] = 0.0f;
     g.position.px(5, 3)[2] = INFINITY;
     auto cpu = make_cpu_backend(2);
-    for (March m : {March::Seed, March::Linear}) {
+    for (const MarchInfo& info : march_table()) {
+      if (info.needs_mesh) continue;
+      const March m = info.id;
       for (float md : {0.0f, 1e6f}) {
         for (float th : {0.0f, 1e6f}) {
           for (float res : {0.0f, 1.0f}) {
@@ -99,7 +102,7 @@ TEST(SeedMarch, ExtremesStayFiniteAndInRange) {
             o.max_distance = md;
             o.thickness = th;
             o.resolution = res;
-            o.steps = m == March::Seed ? 1000 : 1000;
+            o.steps = 1000;
             Image uv = cpu->trace({g.position, g.normal, nullptr, g.projection}, o);
             for (float v : uv.data) ASSERT_TRUE(std::isfinite(v));
             for (size_t i = 0; i < uv.pixel_count(); ++i) {

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "glint/errors.h"
+#include "glint/marches.h"
 #include "glint/options.h"
 #include "glint/projection.h"
 

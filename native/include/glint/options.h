@@ -6,9 +6,11 @@
 
 namespace glint {
 
+// The marches; what each is and which options it reads is in glint/marches.h.
 enum class March {
   Seed,    // the chapter's two-pass march: coarse pass + bisection
   Linear,  // the book's older single march: fixed view-space steps, step back on a hit
+  Hiz,     // min/max depth pyramid walk with ray-span hits
 };
 
 enum class Combine {
@@ -19,8 +21,7 @@ enum class Combine {
 struct TraceOptions {
   float max_distance = 15.0f;  // view-space units (Blender units): longest reflected ray
   float resolution = 0.3f;     // [0, 1]: share of the on-screen pixels the coarse pass visits
-                               // (ignored by March::Linear)
-  int steps = 10;              // Seed: bisection iterations; Linear: view-space steps
+  int steps = 10;              // an iteration budget; its meaning per march is in marches.h
   float thickness = 0.5f;      // view-space units: how far behind a surface still counts as a hit
   March march = March::Seed;
 };
@@ -46,10 +47,8 @@ void validate(const PipelineOptions& o);
 // cores" and a huge one start a thread per image row.
 void validate_threads(int threads);
 
-// Name <-> enum, for the bindings, the CLI and EXR headers.
-March parse_march(const std::string& name);      // "seed" | "linear"
+// Name <-> enum, for the bindings, the CLI and EXR headers (marches: marches.h).
 Combine parse_combine(const std::string& name);  // "over" | "seed"
-const char* to_string(March m);
 const char* to_string(Combine c);
 
 // Limits, public so that docs, bindings and tests quote the same numbers.

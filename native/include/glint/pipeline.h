@@ -15,6 +15,8 @@ struct PipelineInputs {
   Image specular;  // rgb specular colour, a = shininess in [0, 1]
   Image color;     // the base image the reflections are taken from and composited over
   Mat4 projection;
+  Image back_position;                // optional (empty: none); see TraceInputs
+  const TriangleMesh* mesh = nullptr;  // for marches that need the triangles
 };
 
 struct StageTiming {

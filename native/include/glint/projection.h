@@ -22,6 +22,8 @@ enum class ProjectionKind {
 // Throws InvalidArgument("projection", ...) for a non-finite or singular matrix.
 void validate_projection(const Mat4& p);
 ProjectionKind classify_projection(const Mat4& p);
+// The inverse of a matrix validate_projection() accepts.
+Mat4 inverse(const Mat4& p);
 
 // Convenience builders, mostly for tests and the command-line tool.
 // fov_y in radians; aspect = width / height; near/far > 0 in view units.

@@ -42,11 +42,19 @@ float shininess_to_alpha(float shininess);
 // What the trace stage needs to know about which pixels matter. With a
 // specular buffer, pixels whose specular amount is zero are not traced and
 // report (0, 0, 0, 0); without one every seen pixel is traced.
+struct TriangleMesh;  // glint/mesh.h
+
 struct TraceInputs {
   const Image& position;
   const Image& normal;
   const Image* specular = nullptr;
   Mat4 projection;
+  // Optional: the nearest surface behind each pixel's own, same layout as
+  // `position` (w = 0 where there is none). Marches that read it use
+  // back - front as that texel's true thickness instead of the option.
+  const Image* back_position = nullptr;
+  // The triangles the G-buffer was made from, for marches that need them.
+  const TriangleMesh* mesh = nullptr;
 };
 
 class Backend {

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "glint/errors.h"
+#include "glint/marches.h"
 #include "glint/stages.h"
 #include "march.h"
 #include "parallel.h"
@@ -110,25 +111,7 @@ class CpuBackend final : public Backend {
 
   Image trace(const TraceInputs& in, const TraceOptions& opt) override {
     require_trace_inputs(in, opt);
-    Image out(in.position.width, in.position.height);
-    std::vector<float> view_distance(in.position.pixel_count());
-    cpu::parallel_rows(0, in.position.height, threads_, [&](int y) {
-      cpu::fill_view_distance(in.position, y, view_distance.data() + static_cast<size_t>(y) * in.position.width);
-    });
-    const cpu::MarchSetup setup =
-        cpu::make_setup(in.position, in.normal, in.projection, opt, view_distance.data());
-    const bool linear = opt.march == March::Linear;
-    const Image* spec = in.specular;
-    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
-      for (int x = 0; x < out.width; ++x) {
-        if (spec && !is_reflective(spec->px(x, y))) continue;  // the seed returns early here
-        if (linear)
-          cpu::march_linear(setup, x, y, out.px(x, y));
-        else
-          cpu::march_seed(setup, x, y, out.px(x, y));
-      }
-    });
-    return out;
+    return march_info(opt.march).cpu(in, opt, threads_);
   }
 
   Image reflection_color(const Image& uv, const Image& color) override {
@@ -283,35 +266,6 @@ float shininess_to_alpha(float shininess) {
   const float a = shininess / kMaxShininess;
   if (!(a > 0.0f)) return 0.0f;
   return a > 1.0f ? 1.0f : a;
-}
-
-void require_image(const Image& img, const char* name) {
-  if (img.width <= 0 || img.height <= 0)
-    throw InvalidArgument(name, "expected a non-empty image, got " + std::to_string(img.width) +
-                                    "x" + std::to_string(img.height));
-  if (img.width > kMaxImageSide || img.height > kMaxImageSide)
-    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
-                                    " pixels a side, got " + std::to_string(img.width) + "x" +
-                                    std::to_string(img.height));
-  if (img.data.size() != img.pixel_count() * 4)
-    throw InvalidArgument(name, "pixel storage does not match its size");
-}
-
-void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name) {
-  require_image(b, b_name);
-  if (a.width != b.width || a.height != b.height)
-    throw InvalidArgument(b_name, std::string("expected the size of ") + a_name + " (" +
-                                      std::to_string(a.width) + "x" + std::to_string(a.height) +
-                                      "), got " + std::to_string(b.width) + "x" +
-                                      std::to_string(b.height));
-}
-
-void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
-  require_image(in.position, "position");
-  require_same_size(in.position, "position", in.normal, "normal");
-  if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
-  validate(opt);
-  validate_projection(in.projection);
 }
 
 std::unique_ptr<Backend> make_cpu_backend(int threads) {

@@ -9,35 +9,12 @@
 #include <cstdint>
 #include <limits>
 
+#include "parallel.h"
+#include "ray.h"
+#include "trace.h"
+
 namespace glint::cpu {
 namespace {
-
-struct V3 {
-  float x, y, z;
-};
-inline V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline V3 operator*(V3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-inline float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline float length(V3 a) { return std::sqrt(dot(a, a)); }
-inline V3 normalize(V3 a) { return a * (1.0f / length(a)); }
-inline V3 reflect(V3 i, V3 n) { return i - n * (2.0f * dot(n, i)); }
-inline bool finite(float v) { return v - v == 0.0f; }
-inline bool finite(V3 v) { return finite(v.x) && finite(v.y) && finite(v.z); }
-inline float clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
-inline float mixf(float a, float b, float t) { return a * (1.0f - t) + b * t; }
-
-// clip = P * (v, 1), in float as the shader does it.
-inline void clip_of(const float* P, V3 v, float c[4]) {
-  for (int r = 0; r < 4; ++r) c[r] = P[r * 4 + 0] * v.x + P[r * 4 + 1] * v.y + P[r * 4 + 2] * v.z + P[r * 4 + 3];
-}
-
-inline double clip_row(const double* P, int r, double x, double y, double z) {
-  return P[r * 4 + 0] * x + P[r * 4 + 1] * y + P[r * 4 + 2] * z + P[r * 4 + 3];
-}
-
-// View distance: how far in front of the camera a point is.
-inline float view_distance(V3 v) { return -v.z; }
 
 // FIX 3: nearest texel at floor(uv * size); outside the image or on an
 // unseen texel is a miss. Returns the texel's index (or -1 on a miss) and
@@ -67,74 +44,6 @@ inline void texel_at(const MarchSetup& s, long i, float out[4]) {
   }
   const float* p = s.position->data.data() + static_cast<size_t>(i) * 4;
   out[0] = p[0]; out[1] = p[1]; out[2] = p[2]; out[3] = p[3];
-}
-
-// Reads the pixel's own position and normal; false where the seed reports 0.
-// FIX 4: unseen pixels, zero or non-finite normals, and a position at the eye
-// (which has no direction) give (0, 0, 0, 0) instead of NaN.
-inline bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_from, V3& normal) {
-  const float* p = s.position->px(x, y);
-  if (!texel_seen(p)) return false;
-  const float* n = s.normal->px(x, y);
-  normal = {n[0], n[1], n[2]};
-  if (!finite(normal) || dot(normal, normal) == 0.0f) return false;
-  from = {p[0], p[1], p[2]};
-  // The incident direction: the seed's normalize(position) is the view ray of
-  // a camera at the origin. An orthographic camera's view rays are parallel,
-  // so reflecting normalize(position) there would mirror the wrong ray.
-  if (s.eye_kind == MarchSetup::Eye::Origin) {
-    if (dot(from, from) == 0.0f) return false;
-    unit_from = normalize(from);
-  } else if (s.eye_kind == MarchSetup::Eye::Point) {
-    const V3 d = from - V3{s.eye[0], s.eye[1], s.eye[2]};
-    if (dot(d, d) == 0.0f) return false;
-    unit_from = normalize(d);
-  } else {
-    unit_from = {s.eye[0], s.eye[1], s.eye[2]};
-  }
-  normal = normalize(normal);
-  return finite(unit_from) && finite(normal);
-}
-
-// FIX 2: the length of the ray, shortened so that its end stays on or in
-// front of the near plane (clip z >= -w) with w > 0. The plane test is
-// linear along the ray, so the crossing is solved in double. The float end
-// point then lands on the plane give or take a rounding step, so it is
-// checked and, while behind, pulled back by a shrink that starts at a few
-// float steps and doubles each time: ordinary rays lose ~1e-7 of their
-// length, while the extremes (a point 1e7 away with a 1e-4 near plane) still
-// reach a valid end within a few dozen tries.
-// Returns a negative length where the origin itself is not in front.
-float clipped_length(const MarchSetup& s, V3 from, V3 dir, float max_distance) {
-  const double* P = s.projd;
-  auto near_fn = [&](double x, double y, double z) {
-    return clip_row(P, 2, x, y, z) + clip_row(P, 3, x, y, z);
-  };
-  const double n0 = near_fn(from.x, from.y, from.z);
-  if (!(n0 >= 0.0) || !(clip_row(P, 3, from.x, from.y, from.z) > 0.0)) return -1.0f;
-  double len = max_distance;
-  const double n1 = near_fn(from.x + dir.x * len, from.y + dir.y * len, from.z + dir.z * len);
-  if (n1 < 0.0) len = len * (n0 / (n0 - n1));
-  const float full = static_cast<float>(len);
-  float lf = full;
-  float shrink = 1.0f / 4194304.0f;  // 2^-22: two float steps of the length
-  for (int i = 0; i < 64; ++i) {
-    const V3 e = from + dir * lf;
-    if (near_fn(e.x, e.y, e.z) >= 0.0 && clip_row(P, 3, e.x, e.y, e.z) > 0.0) return lf;
-    lf = full * (1.0f - shrink);
-    shrink = shrink * 2.0f > 1.0f ? 1.0f : shrink * 2.0f;
-  }
-  return 0.0f;
-}
-
-// startFrag / endFrag of the seed: projected, divided, to pixel coordinates.
-inline bool to_frag(const float* P, V3 v, float w, float h, float frag[2]) {
-  float c[4];
-  clip_of(P, v, c);
-  if (!(c[3] > 0.0f)) return false;
-  frag[0] = (c[0] / c[3] * 0.5f + 0.5f) * w;
-  frag[1] = (c[1] / c[3] * 0.5f + 0.5f) * h;
-  return finite(frag[0]) && finite(frag[1]);
 }
 
 // SKIP: the range of first-pass sample indices k (1..n) whose sample can lie
@@ -439,6 +348,42 @@ void march_linear(const MarchSetup& s, int x, int y, float out[4]) {
       count += 1.0f;
     }
   }
+}
+
+std::vector<float> view_distances(const Image& position, int threads) {
+  std::vector<float> vd(position.pixel_count());
+  parallel_rows(0, position.height, threads, [&](int y) {
+    fill_view_distance(position, y, vd.data() + static_cast<size_t>(y) * position.width);
+  });
+  return vd;
+}
+
+namespace {
+
+// The seed and the linear march share everything but the per-pixel march.
+template <class PerPixel>
+Image trace_pixels(const TraceInputs& in, const TraceOptions& opt, int threads, PerPixel&& march) {
+  Image out(in.position.width, in.position.height);
+  const std::vector<float> vd = view_distances(in.position, threads);
+  const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, vd.data());
+  const Image* spec = in.specular;
+  parallel_rows(0, out.height, threads, [&](int y) {
+    for (int x = 0; x < out.width; ++x) {
+      if (spec && !is_reflective(spec->px(x, y))) continue;  // the seed returns early here
+      march(setup, x, y, out.px(x, y));
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+Image trace_seed(const TraceInputs& in, const TraceOptions& opt, int threads) {
+  return trace_pixels(in, opt, threads, march_seed);
+}
+
+Image trace_linear(const TraceInputs& in, const TraceOptions& opt, int threads) {
+  return trace_pixels(in, opt, threads, march_linear);
 }
 
 }  // namespace glint::cpu

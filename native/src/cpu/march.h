@@ -1,6 +1,8 @@
 // The per-pixel ray marches of the CPU backend. Written in float32 with the
 // same operation order as shaders/trace_*.frag so that CPU and GL agree.
 #pragma once
+#include <vector>
+
 #include "glint/image.h"
 #include "glint/options.h"
 #include "glint/projection.h"
@@ -36,6 +38,8 @@ MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& pr
                       const TraceOptions& opt, const float* view_distance);
 // Row y of the view-distance buffer (see MarchSetup::view_distance).
 void fill_view_distance(const Image& position, int y, float* out);
+// The whole view-distance buffer, rows in parallel.
+std::vector<float> view_distances(const Image& position, int threads);
 
 // Writes (u, v, visibility, visibility) for pixel (x, y); (0, 0, 0, 0) where
 // nothing was seen, the normal is zero, or the ray cannot be projected.

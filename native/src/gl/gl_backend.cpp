@@ -28,6 +28,7 @@
 #include "gl/program.h"
 #include "glint/backend.h"
 #include "glint/errors.h"
+#include "glint/marches.h"
 
 namespace glint {
 namespace gl {
@@ -73,7 +74,8 @@ class GlState {
     const Texture& pos = upload(kIn0, in.position, "trace", passes_textures);
     const Texture& nrm = upload(kIn1, in.normal, "trace", passes_textures);
     const Texture* spec = in.specular ? &upload(kIn2, *in.specular, "trace", passes_textures) : nullptr;
-    const GLuint prog = program(opt.march == March::Linear ? "trace_linear.frag" : "trace_seed.frag");
+    const MarchInfo& info = march_info(opt.march);
+    const GLuint prog = program(info.gl_program);
     gl_.UseProgram(prog);
     bind(prog, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
     bind(prog, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -96,8 +98,7 @@ class GlState {
     gl_.Uniform1i(loc(prog, "u_steps"), opt.steps);
     const float r = opt.resolution;
     gl_.Uniform1f(loc(prog, "u_resolution"), r < 0.0f ? 0.0f : (r > 1.0f ? 1.0f : r));
-    return draw_and_read(w, h, opt.march == March::Linear ? "trace_linear" : "trace_seed",
-                         passes_textures);
+    return draw_and_read(w, h, info.name, passes_textures);
   }
 
   Image reflection_color(const Image& uv, const Image& color) {
@@ -805,6 +806,9 @@ class GlBackend final : public Backend {
 
   Image trace(const TraceInputs& in, const TraceOptions& opt) override {
     require_trace_inputs(in, opt);
+    // A march with no GPU form runs its CPU reference (marches() says which).
+    const MarchInfo& info = march_info(opt.march);
+    if (!info.gl_program) return info.cpu(in, opt, 0);
     Image out;
     worker_.run([&](GlState& s) { out = s.trace(in, opt); });
     return out;

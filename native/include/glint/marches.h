@@ -1,0 +1,49 @@
+// The table of marches: every way Glint can turn a G-buffer into a
+// reflected-uv buffer, in one place. The bindings, the command-line tool, the
+// add-on (through glint_core.marches()), the tests and the sweeps all read
+// it; an unknown name is an error everywhere. docs/marches.md says how to add
+// a row.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "glint/image.h"
+#include "glint/options.h"
+
+namespace glint {
+
+struct TraceInputs;
+
+// One trace option as a march uses it: which keyword, and what it means there.
+struct MarchKnob {
+  const char* option;   // a TraceOptions field, by its Python keyword name
+  const char* meaning;  // what the value does for this march
+};
+
+// A whole frame of one march on the CPU: the reference every backend is held to.
+using CpuTraceFn = Image (*)(const TraceInputs& in, const TraceOptions& opt, int threads);
+
+struct MarchInfo {
+  March id;
+  const char* name;         // the `march=` keyword value
+  const char* description;  // one line, for help texts and tooltips
+  std::vector<MarchKnob> knobs;  // the options it reads; the others are ignored
+  bool needs_mesh;          // reads TraceInputs::mesh (the scene's triangles)
+  bool uses_back_position;  // reads TraceInputs::back_position where given
+  CpuTraceFn cpu;           // the CPU implementation
+  // The GL backend's fragment program (a file in shaders/), or nullptr when
+  // the march has no GPU form: backend="gl" then runs `cpu` and says so.
+  const char* gl_program;
+};
+
+// Every march, in the order help texts list them.
+const std::vector<MarchInfo>& march_table();
+const MarchInfo& march_info(March m);
+// Throws InvalidArgument("march", ...) listing the known names.
+const MarchInfo& march_info(const std::string& name);
+inline March parse_march(const std::string& name) { return march_info(name).id; }
+inline const char* to_string(March m) { return march_info(m).name; }
+// "seed", "linear", ... joined with `sep`, for messages and help texts.
+std::string march_names(const char* sep = ", ");
+
+}  // namespace glint

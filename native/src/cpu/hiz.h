@@ -1,0 +1,47 @@
+// The "hiz" march's pyramid and per-ray walk, on the CPU. The GL backend runs
+// the same steps in shaders/hiz_base.frag, hiz_reduce.frag and
+// trace_hiz.frag; docs/marches.md explains the method.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "glint/image.h"
+#include "glint/options.h"
+#include "glint/projection.h"
+
+namespace glint::cpu {
+
+// Level sizes follow OpenGL's mip rule, floor(size / 2) and at least 1, so
+// that the CPU and GL pyramids have the same cells. The last cell of a row or
+// column covers what an odd size leaves over (see cell_bounds()).
+struct HizPyramid {
+  int levels = 0;
+  std::vector<int> width, height;
+  std::vector<size_t> offset;  // first cell of each level, in cells
+  // Two floats per cell: the nearest view distance of any surface in it
+  // (over each texel's whole footprint, not only its centre), and the
+  // farthest view distance its surfaces reach once their thickness is added.
+  // Cells with nothing seen hold (+inf, -inf) and never overlap a ray.
+  std::vector<float> range;
+
+  const float* cell(int level, int i, int j) const {
+    return range.data() + (offset[level] + static_cast<size_t>(j) * width[level] + i) * 2;
+  }
+};
+
+// The inverse projection as floats, row-major: what the base level needs to
+// find the depth a texel's tangent plane has at the texel's corners.
+struct HizCamera {
+  float inv[16];
+};
+HizCamera hiz_camera(const Mat4& projection);
+
+// Per-texel thickness: back_position's view distance minus the front's where
+// a back surface is known and behind, else `thickness`.
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads);
+
+// Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).
+void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]);
+
+}  // namespace glint::cpu

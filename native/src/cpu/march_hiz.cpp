@@ -1,0 +1,360 @@
+// The "hiz" march: a min/max depth pyramid walked cell by cell along the
+// reflected ray's screen-space line (docs/marches.md has the derivation).
+//
+// Why not the seed's point samples: a sample tests one point of the ray
+// against one texel, so a grazing ray that crosses more than `thickness` of
+// depth between two samples passes through surfaces unseen, and a thicker
+// `thickness` reports rays that pass behind objects. Here every stretch of
+// the ray is tested as an interval: across a cell the ray covers a depth span
+// [depth(t_in), depth(t_out)] (depth is monotonic along a line in screen
+// space), and the cell is entered only if that span meets the cell's
+// [nearest surface, farthest surface + thickness]. Empty space is skipped a
+// whole cell at a time and no interval of depth is ever jumped over.
+//
+// At a texel the surface is the texel's tangent plane (its position and
+// normal), not a flat depth: its depth range covers the texel's footprint, so
+// a wall seen at a grazing angle is continuous instead of a staircase, and a
+// hit is where the ray crosses that plane, to a fraction of a texel. A ray
+// that stays in front of the plane is no hit, which is what keeps a floor's
+// own reflection rays from hitting the floor next to where they started.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "glint/stages.h"
+#include "hiz.h"
+#include "parallel.h"
+#include "ray.h"
+#include "trace.h"
+
+namespace glint::cpu {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Picking the cell a ray enters: the point a 64th of a pixel past the
+// boundary it just crossed, in its direction of travel. Far below anything
+// that moves a reported uv, and above float rounding up to 16k pixels.
+constexpr float kCellNudge = 1.0f / 64.0f;
+// How far, relative to the surface's distance from the camera, the ray must
+// be behind a texel's plane to count as having crossed it. Keeps rays that
+// run along a surface (a floor's own rays, just above it) from hitting it
+// through rounding.
+constexpr float kPlaneTolerance = 1e-5f;
+// A ray found behind a texel's plane by at most this share of the texel's
+// view distance crossed the surface in the previous texel's footprint (each
+// texel has its own plane, so the crossing can fall between two of them).
+constexpr float kBehindSlack = 1e-3f;
+// A texel's footprint range is clamped to its centre +- this share of its
+// view distance (plus its thickness): a plane seen edge-on would otherwise
+// reach infinity and make every cell above it overlap every ray.
+constexpr float kFootprintSpread = 0.5f;
+
+// The tangent plane's view distance at screen point (sx, sy) in NDC: the
+// plane is L . (sx, sy, sz, 1) = 0 in NDC (L = n^T H_xyz - k H_w), which
+// gives sz, and the view point there is H (sx, sy, sz, 1).
+inline float plane_depth(const float* H, const float L[4], float sx, float sy) {
+  const float sz = -(L[0] * sx + L[1] * sy + L[3]) / L[2];
+  const float num = H[8] * sx + H[9] * sy + H[10] * sz + H[11];
+  const float den = H[12] * sx + H[13] * sy + H[14] * sz + H[15];
+  return -(num / den);
+}
+
+inline bool normal_usable(const float* n) {
+  return finite(V3{n[0], n[1], n[2]}) && (n[0] != 0.0f || n[1] != 0.0f || n[2] != 0.0f);
+}
+
+// The thickness of texel (x, y): how far behind its surface still counts.
+inline float texel_thickness(const Image& position, const Image* back, float thickness, int x, int y) {
+  if (!back) return thickness;
+  const float* b = back->px(x, y);
+  const float d = -position.px(x, y)[2];
+  return texel_seen(b) && -b[2] > d ? -b[2] - d : thickness;
+}
+
+// The plane row L of texel (x, y) in NDC (see plane_depth); false when the
+// texel has no usable normal or the plane is seen exactly edge-on.
+inline bool texel_plane(const Image& position, const Image& normal, const HizCamera& cam, int x, int y,
+                        float L[4]) {
+  const float* n = normal.px(x, y);
+  if (!normal_usable(n)) return false;
+  const float* p = position.px(x, y);
+  const float* H = cam.inv;
+  const float k = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
+  for (int c = 0; c < 4; ++c) L[c] = n[0] * H[c] + n[1] * H[4 + c] + n[2] * H[8 + c] - k * H[12 + c];
+  return L[2] != 0.0f;
+}
+
+// Base level: each seen texel's [nearest, farthest + thickness] view distance
+// over its footprint.
+void base_range(const Image& position, const Image& normal, const Image* back, const HizCamera& cam,
+                float thickness, int x, int y, float out[2]) {
+  const float* p = position.px(x, y);
+  if (!texel_seen(p)) {
+    out[0] = kInf;
+    out[1] = -kInf;
+    return;
+  }
+  const float d = -p[2];
+  const float t = texel_thickness(position, back, thickness, x, y);
+  float lo = d, hi = d;
+  float L[4];
+  if (texel_plane(position, normal, cam, x, y, L)) {
+    const float spread = kFootprintSpread * std::fabs(d) + t;
+    const float w = static_cast<float>(position.width), h = static_cast<float>(position.height);
+    for (int corner = 0; corner < 4; ++corner) {
+      const float sx = static_cast<float>(x + (corner & 1)) * (2.0f / w) - 1.0f;
+      const float sy = static_cast<float>(y + (corner >> 1)) * (2.0f / h) - 1.0f;
+      float cd = plane_depth(cam.inv, L, sx, sy);
+      if (!finite(cd)) continue;
+      cd = std::min(std::max(cd, d - spread), d + spread);
+      lo = std::min(lo, cd);
+      hi = std::max(hi, cd);
+    }
+  }
+  out[0] = lo;
+  out[1] = hi + t;
+}
+
+// Everything about one ray that does not change along the walk. Points on
+// the ray are interpolated in homogeneous form: at screen fraction t the
+// view point is A(t) / B(t), with A = view / w and B = 1 / w both linear in t
+// for any projective camera.
+struct Ray {
+  float f0[2], d[2];  // start pixel coordinates and end - start
+  float a0[3], da[3];  // A(0), A(1) - A(0)
+  float b0, db;       // B(0), B(1) - B(0)
+  float t_end;        // where the line leaves the image, or 1
+
+  float depth(float t) const { return -(a0[2] + t * da[2]) / (b0 + t * db); }
+  float b(float t) const { return b0 + t * db; }
+  // n . (view point - P), times B(t) > 0: the plane test without a division.
+  float plane(float t, const float n[3], float np) const {
+    return n[0] * (a0[0] + t * da[0]) + n[1] * (a0[1] + t * da[1]) + n[2] * (a0[2] + t * da[2]) -
+           np * (b0 + t * db);
+  }
+  // Where the line leaves the pixel box [x0, x1) x [y0, y1), as a fraction.
+  float exit(const int box[4]) const {
+    float te = t_end;
+    if (d[0] > 0.0f) te = std::min(te, (static_cast<float>(box[2]) - f0[0]) / d[0]);
+    if (d[0] < 0.0f) te = std::min(te, (static_cast<float>(box[0]) - f0[0]) / d[0]);
+    if (d[1] > 0.0f) te = std::min(te, (static_cast<float>(box[3]) - f0[1]) / d[1]);
+    if (d[1] < 0.0f) te = std::min(te, (static_cast<float>(box[1]) - f0[1]) / d[1]);
+    return te;
+  }
+};
+
+bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
+  V3 from, unit_from, normal;
+  if (!read_origin(s, x, y, from, unit_from, normal)) return false;
+  const V3 dir = normalize(reflect(unit_from, normal));
+  if (!finite(dir)) return false;
+  const float len = clipped_length(s, from, dir, s.opt.max_distance);
+  if (!(len > 0.0f)) return false;
+  const V3 end = from + dir * len;
+  const float w = static_cast<float>(s.position->width), h = static_cast<float>(s.position->height);
+  float c0[4], c1[4];
+  clip_of(s.proj, from, c0);
+  clip_of(s.proj, end, c1);
+  if (!(c0[3] > 0.0f) || !(c1[3] > 0.0f)) return false;
+  float e[2];
+  if (!to_frag(s.proj, from, w, h, r.f0) || !to_frag(s.proj, end, w, h, e)) return false;
+  r.d[0] = e[0] - r.f0[0];
+  r.d[1] = e[1] - r.f0[1];
+  if (!finite(r.d[0]) || !finite(r.d[1])) return false;
+  r.b0 = 1.0f / c0[3];
+  r.db = 1.0f / c1[3] - r.b0;
+  const float fa[3] = {from.x, from.y, from.z}, ea[3] = {end.x, end.y, end.z};
+  for (int k = 0; k < 3; ++k) {
+    r.a0[k] = fa[k] * r.b0;
+    r.da[k] = ea[k] * (1.0f / c1[3]) - r.a0[k];
+  }
+  const int image[4] = {0, 0, s.position->width, s.position->height};
+  r.t_end = 1.0f;
+  r.t_end = r.exit(image);
+  return r.t_end > 0.0f;
+}
+
+// The cell of `level` that the line occupies just after fraction t.
+inline void cell_at(const HizPyramid& p, const Ray& r, int level, float t, int& i, int& j) {
+  const float nx = r.d[0] > 0.0f ? kCellNudge : (r.d[0] < 0.0f ? -kCellNudge : 0.0f);
+  const float ny = r.d[1] > 0.0f ? kCellNudge : (r.d[1] < 0.0f ? -kCellNudge : 0.0f);
+  const float px = r.f0[0] + t * r.d[0] + nx, py = r.f0[1] + t * r.d[1] + ny;
+  const float sx = std::floor(px / static_cast<float>(1 << level));
+  const float sy = std::floor(py / static_cast<float>(1 << level));
+  i = sx < 0.0f ? 0 : (sx >= static_cast<float>(p.width[level]) ? p.width[level] - 1 : static_cast<int>(sx));
+  j = sy < 0.0f ? 0 : (sy >= static_cast<float>(p.height[level]) ? p.height[level] - 1 : static_cast<int>(sy));
+}
+
+// What a texel does to the ray between fractions ta and tb.
+enum class TexelOutcome {
+  Pass,     // in front of the surface, or behind its thickness: walk on
+  Hit,      // crosses the surface from the front: the reflection is there
+  Blocked,  // inside the surface's thickness: what it hits is hidden, so the
+            // ray reports nothing and the walk ends
+};
+
+// The ray crosses the texel's plane from the front (t_hit: that crossing),
+// or it is behind the plane at the texel, where the texel's thickness says
+// whether that is solid. Being behind by no more than a rounding slack is a
+// crossing found one texel late, and counts as a hit.
+TexelOutcome texel_hit(const MarchSetup& s, const HizCamera& cam, const Image* back, const Ray& r,
+                       int i, int j, float ta, float tb, float& t_hit) {
+  const Image& position = *s.position;
+  const float* n = s.normal->px(i, j);
+  t_hit = ta;
+  if (!normal_usable(n)) return TexelOutcome::Hit;  // no plane: the depth span decided
+  const float* p = position.px(i, j);
+  const float inv = 1.0f / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const float u[3] = {n[0] * inv, n[1] * inv, n[2] * inv};
+  const float np = u[0] * p[0] + u[1] * p[1] + u[2] * p[2];
+  const float tol = kPlaneTolerance * std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+  const float ga = r.plane(ta, u, np), gb = r.plane(tb, u, np);
+  const bool a_behind = ga < -tol * r.b(ta), b_behind = gb < -tol * r.b(tb);
+  if (!a_behind && !b_behind) return TexelOutcome::Pass;
+  if (!a_behind) {
+    const float f = ga / (ga - gb);  // G is linear in t: its zero, in [0, 1]
+    t_hit = ta + (tb - ta) * std::min(std::max(f, 0.0f), 1.0f);
+    return TexelOutcome::Hit;
+  }
+  // Behind from the start: how far, in view distance, at either end.
+  float L[4];
+  if (!texel_plane(position, *s.normal, cam, i, j, L)) return TexelOutcome::Hit;
+  const float thick = texel_thickness(position, back, s.opt.thickness, i, j);
+  const float w = static_cast<float>(position.width), h = static_cast<float>(position.height);
+  auto behind_by = [&](float t) {
+    const float sx = (r.f0[0] + t * r.d[0]) * (2.0f / w) - 1.0f;
+    const float sy = (r.f0[1] + t * r.d[1]) * (2.0f / h) - 1.0f;
+    return r.depth(t) - plane_depth(cam.inv, L, sx, sy);
+  };
+  const float slack = kBehindSlack * std::fabs(p[2]);
+  const float da = behind_by(ta);
+  if (da <= slack) return TexelOutcome::Hit;
+  if (da <= thick) return TexelOutcome::Blocked;
+  if (b_behind && behind_by(tb) <= thick) return TexelOutcome::Blocked;
+  return TexelOutcome::Pass;
+}
+
+void march_hiz(const MarchSetup& s, const HizPyramid& pyr, const HizCamera& cam, const Image* back,
+               int x, int y, float out[4]) {
+  out[0] = out[1] = out[2] = out[3] = 0.0f;
+  Ray r;
+  if (!make_ray(s, x, y, r)) return;
+  const Image& pos = *s.position;
+  const int top = pyr.levels - 1;
+  const long budget = static_cast<long>(s.opt.steps) * pyr.levels;
+
+  // Leave the origin's own texel first: the ray starts on its surface.
+  int box[4] = {x, y, x + 1, y + 1};
+  float t = r.exit(box);
+  float zt = r.depth(t);
+  int level = 0;
+  for (long it = 0; it < budget && t < r.t_end; ++it) {
+    int i, j;
+    cell_at(pyr, r, level, t, i, j);
+    cell_bounds(pyr, level, i, j, box);
+    float te = r.exit(box);
+    if (!(te > t)) te = std::nextafter(t, kInf);  // always move on
+    const float ze = r.depth(te);
+    const float* c = pyr.cell(level, i, j);
+    const float lo = std::min(zt, ze), hi = std::max(zt, ze);
+    if (hi >= c[0] && lo <= c[1]) {
+      if (level > 0) {
+        --level;  // something in this cell may meet the ray: look closer
+        continue;
+      }
+      float th;
+      const TexelOutcome hit = texel_hit(s, cam, back, r, i, j, t, te, th);
+      if (hit == TexelOutcome::Blocked) return;
+      if (hit == TexelOutcome::Hit) {
+        const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
+        const float v = (r.f0[1] + th * r.d[1]) / static_cast<float>(pos.height);
+        if (!finite(u) || !finite(v)) return;
+        out[0] = u;
+        out[1] = v;
+        out[2] = out[3] = 1.0f;
+        return;
+      }
+    }
+    t = te;
+    zt = ze;
+    if (level < top) ++level;  // empty so far: try a bigger stride
+  }
+}
+
+}  // namespace
+
+HizCamera hiz_camera(const Mat4& projection) {
+  const Mat4 inv = inverse(projection);
+  HizCamera cam;
+  for (int k = 0; k < 16; ++k) cam.inv[k] = static_cast<float>(inv.m[k]);
+  return cam;
+}
+
+void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {
+  out[0] = i << level;
+  out[1] = j << level;
+  out[2] = i == p.width[level] - 1 ? p.width[0] : (i + 1) << level;
+  out[3] = j == p.height[level] - 1 ? p.height[0] : (j + 1) << level;
+}
+
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads) {
+  HizPyramid p;
+  int w = position.width, h = position.height;
+  size_t cells = 0;
+  for (;;) {
+    p.width.push_back(w);
+    p.height.push_back(h);
+    p.offset.push_back(cells);
+    cells += static_cast<size_t>(w) * h;
+    if (w == 1 && h == 1) break;
+    w = std::max(1, w / 2);
+    h = std::max(1, h / 2);
+  }
+  p.levels = static_cast<int>(p.width.size());
+  p.range.resize(cells * 2);
+  parallel_rows(0, position.height, threads, [&](int y) {
+    float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
+    for (int x = 0; x < position.width; ++x)
+      base_range(position, normal, back_position, cam, thickness, x, y, row + 2 * x);
+  });
+  for (int l = 1; l < p.levels; ++l) {
+    const int pw = p.width[l - 1], ph = p.height[l - 1];
+    parallel_rows(0, p.height[l], threads, [&](int j) {
+      // The last cell of a row or column also takes what an odd size leaves.
+      const int y0 = 2 * j, y1 = j == p.height[l] - 1 ? ph - 1 : std::min(2 * j + 1, ph - 1);
+      for (int i = 0; i < p.width[l]; ++i) {
+        const int x0 = 2 * i, x1 = i == p.width[l] - 1 ? pw - 1 : std::min(2 * i + 1, pw - 1);
+        float lo = kInf, hi = -kInf;
+        for (int yy = y0; yy <= y1; ++yy)
+          for (int xx = x0; xx <= x1; ++xx) {
+            const float* c = p.cell(l - 1, xx, yy);
+            lo = std::min(lo, c[0]);
+            hi = std::max(hi, c[1]);
+          }
+        float* o = p.range.data() + (p.offset[l] + static_cast<size_t>(j) * p.width[l] + i) * 2;
+        o[0] = lo;
+        o[1] = hi;
+      }
+    });
+  }
+  return p;
+}
+
+Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
+  Image out(in.position.width, in.position.height);
+  const HizCamera cam = hiz_camera(in.projection);
+  const HizPyramid pyr =
+      build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads);
+  const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
+  const Image* spec = in.specular;
+  parallel_rows(0, out.height, threads, [&](int y) {
+    for (int x = 0; x < out.width; ++x) {
+      if (spec && !is_reflective(spec->px(x, y))) continue;
+      march_hiz(setup, pyr, cam, in.back_position, x, y, out.px(x, y));
+    }
+  });
+  return out;
+}
+
+}  // namespace glint::cpu

@@ -1,0 +1,98 @@
+// The table of marches (glint/marches.h) and the input checks every trace
+// passes through, whichever backend runs it.
+#include "glint/marches.h"
+
+#include <string>
+
+#include "cpu/trace.h"
+#include "glint/errors.h"
+#include "glint/stages.h"
+
+namespace glint {
+
+const std::vector<MarchInfo>& march_table() {
+  // Adding a march: a row here, its CPU function in cpu/trace.h, its GL
+  // program in shaders/ (or nullptr), and docs/marches.md.
+  static const std::vector<MarchInfo> table = {
+      {March::Seed, "seed",
+       "The seed chapter's two-pass march: a coarse pass over a share of the pixels, then bisection",
+       {{"max_distance", "length of the reflected ray, view units; also fades the reflection"},
+        {"resolution", "share of the pixels the ray crosses on screen that the coarse pass visits"},
+        {"steps", "bisection iterations after the first coarse hit"},
+        {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}},
+       false, false, &cpu::trace_seed, "trace_seed.frag"},
+      {March::Linear, "linear",
+       "The book's older march: fixed view-space steps, stepping back and approaching after a hit",
+       {{"max_distance", "length of the reflected ray, view units"},
+        {"steps", "view-space steps along the ray (max_distance / steps each)"},
+        {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}},
+       false, false, &cpu::trace_linear, "trace_linear.frag"},
+      {March::Hiz, "hiz",
+       "Min/max depth pyramid walk: skips empty space cell by cell, hits where the ray's depth span "
+       "meets a surface, never skips a depth interval",
+       {{"max_distance", "length of the reflected ray, view units"},
+        {"steps", "walk budget per ray, in cells per pyramid level (steps x levels cells at most)"},
+        {"thickness",
+         "depth of a surface behind its front, view units, where no back_position says better"}},
+       false, true, &cpu::trace_hiz, nullptr},
+  };
+  return table;
+}
+
+const MarchInfo& march_info(March m) {
+  for (const MarchInfo& info : march_table())
+    if (info.id == m) return info;
+  throw Error("glint: march " + std::to_string(static_cast<int>(m)) + " is not in the table");
+}
+
+std::string march_names(const char* sep) {
+  std::string names;
+  for (const MarchInfo& info : march_table()) {
+    if (!names.empty()) names += sep;
+    names += info.name;
+  }
+  return names;
+}
+
+const MarchInfo& march_info(const std::string& name) {
+  for (const MarchInfo& info : march_table())
+    if (name == info.name) return info;
+  throw InvalidArgument("march", "expected one of " + march_names() + ", got \"" + name + "\"");
+}
+
+void require_image(const Image& img, const char* name) {
+  if (img.width <= 0 || img.height <= 0)
+    throw InvalidArgument(name, "expected a non-empty image, got " + std::to_string(img.width) +
+                                    "x" + std::to_string(img.height));
+  if (img.width > kMaxImageSide || img.height > kMaxImageSide)
+    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
+                                    " pixels a side, got " + std::to_string(img.width) + "x" +
+                                    std::to_string(img.height));
+  if (img.data.size() != img.pixel_count() * 4)
+    throw InvalidArgument(name, "pixel storage does not match its size");
+}
+
+void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name) {
+  require_image(b, b_name);
+  if (a.width != b.width || a.height != b.height)
+    throw InvalidArgument(b_name, std::string("expected the size of ") + a_name + " (" +
+                                      std::to_string(a.width) + "x" + std::to_string(a.height) +
+                                      "), got " + std::to_string(b.width) + "x" +
+                                      std::to_string(b.height));
+}
+
+void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
+  require_image(in.position, "position");
+  require_same_size(in.position, "position", in.normal, "normal");
+  if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
+  if (in.back_position)
+    require_same_size(in.position, "position", *in.back_position, "back_position");
+  validate(opt);
+  validate_projection(in.projection);
+  const MarchInfo& info = march_info(opt.march);
+  if (info.needs_mesh && !in.mesh)
+    throw InvalidArgument("mesh", std::string("march \"") + info.name +
+                                      "\" traces the scene's triangles: pass mesh=(vertices, triangles)");
+}
+
+}  // namespace glint
