@@ -547,3 +547,64 @@ def mirror_floor_scene(kind: str = "persp", shift=(0.0, 0.0), sphere=True, box=T
         cam = Camera(eye=(0.0, -12.0, 5.0), target=(0.0, 0.0, 0.8), kind="ortho", ortho_scale=9.0,
                      near=0.1, far=100.0, shift=shift)
     return Scene(objs, cam)
+
+
+def back_layer(scene: Scene, gbuf: dict) -> np.ndarray:
+    """The nearest back-facing surface behind each pixel's own, float32 [H, W, 4]
+    (view xyz, w = 1 where there is one): what a rasterizer's back-face layer
+    holds, and so each closed object's true thickness along the view ray."""
+    h, w = gbuf["object"].shape
+    vm = scene.camera.view_matrix()
+    nx, ny = pixel_ndc(w, h)
+    _, d_v = unproject_rays(gbuf["projection"], nx, ny)
+    seen = (gbuf["object"] >= 0).ravel()
+    o_v = gbuf["position64"].reshape(-1, 3).copy()
+    out = np.zeros((w * h, 4))
+    todo = seen.copy()
+    for _ in range(4):  # a few surfaces deep is plenty for these scenes
+        if not todo.any():
+            break
+        o_w, d_w = _to_world(vm, pts=o_v, dirs=d_v)
+        t, idx, n_w = cast(scene.objects, o_w, d_w)
+        hit = todo & np.isfinite(t)
+        facing_away = np.einsum("ij,ij->i", n_w, d_w) > 0.0
+        found = hit & facing_away
+        p_new = o_v + d_v * np.where(np.isfinite(t), t, 0.0)[:, None]
+        out[found, :3] = p_new[found]
+        out[found, 3] = 1.0
+        todo = hit & ~facing_away
+        o_v = np.where(todo[:, None], p_new, o_v)
+    return out.reshape(h, w, 4).astype(np.float32)
+
+
+def corridor_scene() -> Scene:
+    """A long mirror-floored corridor between two walls, seen from low down so that
+    most floor rays graze: the case where point-sampling marches lose hits."""
+    floor = Material(color=(0.3, 0.3, 0.3), specular=(1.0, 1.0, 1.0), alpha=1.0)
+    objs = [
+        Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), floor),
+        Box((-2.2, -2.0, 0.0), (-1.8, 40.0, 3.0), RED),     # left wall
+        Box((1.8, -2.0, 0.0), (2.2, 40.0, 3.0), GREEN),     # right wall
+        Box((-1.8, 40.0, 0.0), (1.8, 40.4, 3.0), BLUE),     # far end
+        Sphere((-0.7, 9.0, 0.6), 0.6, RED),
+        Box((0.3, 16.0, 0.0), (1.2, 17.0, 1.4), BLUE),
+    ]
+    cam = Camera(eye=(0.0, -1.5, 0.45), target=(0.0, 30.0, 0.25), fov=math.radians(60.0), near=0.05,
+                 far=200.0)
+    return Scene(objs, cam)
+
+
+def facing_wall_scene() -> Scene:
+    """A mirror wall square to the camera with objects in front of it, so that
+    reflected rays come back toward the camera (and toward the near plane)."""
+    wall = Material(color=(0.2, 0.2, 0.25), specular=(1.0, 1.0, 1.0), alpha=1.0)
+    objs = [
+        Box((-6.0, 5.0, -1.0), (6.0, 5.4, 6.0), wall),
+        Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), Material(color=(0.5, 0.45, 0.4))),
+        Sphere((-1.0, 2.0, 0.8), 0.8, RED),
+        Box((0.6, 1.0, 0.0), (1.6, 2.0, 1.5), GREEN),
+        Sphere((1.8, 3.5, 0.4), 0.4, BLUE),
+    ]
+    cam = Camera(eye=(0.0, -4.0, 1.6), target=(0.0, 5.0, 1.4), fov=math.radians(55.0), near=0.1,
+                 far=100.0)
+    return Scene(objs, cam)

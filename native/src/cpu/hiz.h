@@ -42,6 +42,11 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
                              const HizCamera& cam, float thickness, int threads);
 
 // Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).
-void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]);
+inline void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {
+  out[0] = i << level;
+  out[1] = j << level;
+  out[2] = i == p.width[level] - 1 ? p.width[0] : (i + 1) << level;
+  out[3] = j == p.height[level] - 1 ? p.height[0] : (j + 1) << level;
+}
 
 }  // namespace glint::cpu

@@ -133,12 +133,15 @@ struct Ray {
            np * (b0 + t * db);
   }
   // Where the line leaves the pixel box [x0, x1) x [y0, y1), as a fraction.
+  // inv holds 1 / d (0 where d is 0): a product per side instead of a
+  // division, in the one order both backends use.
+  float inv[2];
   float exit(const int box[4]) const {
     float te = t_end;
-    if (d[0] > 0.0f) te = std::min(te, (static_cast<float>(box[2]) - f0[0]) / d[0]);
-    if (d[0] < 0.0f) te = std::min(te, (static_cast<float>(box[0]) - f0[0]) / d[0]);
-    if (d[1] > 0.0f) te = std::min(te, (static_cast<float>(box[3]) - f0[1]) / d[1]);
-    if (d[1] < 0.0f) te = std::min(te, (static_cast<float>(box[1]) - f0[1]) / d[1]);
+    if (d[0] != 0.0f)
+      te = std::min(te, (static_cast<float>(d[0] > 0.0f ? box[2] : box[0]) - f0[0]) * inv[0]);
+    if (d[1] != 0.0f)
+      te = std::min(te, (static_cast<float>(d[1] > 0.0f ? box[3] : box[1]) - f0[1]) * inv[1]);
     return te;
   }
 };
@@ -161,6 +164,8 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
   r.d[0] = e[0] - r.f0[0];
   r.d[1] = e[1] - r.f0[1];
   if (!finite(r.d[0]) || !finite(r.d[1])) return false;
+  r.inv[0] = r.d[0] != 0.0f ? 1.0f / r.d[0] : 0.0f;
+  r.inv[1] = r.d[1] != 0.0f ? 1.0f / r.d[1] : 0.0f;
   r.b0 = 1.0f / c0[3];
   r.db = 1.0f / c1[3] - r.b0;
   const float fa[3] = {from.x, from.y, from.z}, ea[3] = {end.x, end.y, end.z};
@@ -179,10 +184,12 @@ inline void cell_at(const HizPyramid& p, const Ray& r, int level, float t, int& 
   const float nx = r.d[0] > 0.0f ? kCellNudge : (r.d[0] < 0.0f ? -kCellNudge : 0.0f);
   const float ny = r.d[1] > 0.0f ? kCellNudge : (r.d[1] < 0.0f ? -kCellNudge : 0.0f);
   const float px = r.f0[0] + t * r.d[0] + nx, py = r.f0[1] + t * r.d[1] + ny;
-  const float sx = std::floor(px / static_cast<float>(1 << level));
-  const float sy = std::floor(py / static_cast<float>(1 << level));
-  i = sx < 0.0f ? 0 : (sx >= static_cast<float>(p.width[level]) ? p.width[level] - 1 : static_cast<int>(sx));
-  j = sy < 0.0f ? 0 : (sy >= static_cast<float>(p.height[level]) ? p.height[level] - 1 : static_cast<int>(sy));
+  const float scale = 1.0f / static_cast<float>(1 << level);  // a power of two: exact
+  // Truncation is floor for the non-negative values that reach it.
+  const float sx = px * scale, sy = py * scale;
+  const int wl = p.width[level], hl = p.height[level];
+  i = !(sx > 0.0f) ? 0 : (sx >= static_cast<float>(wl) ? wl - 1 : static_cast<int>(sx));
+  j = !(sy > 0.0f) ? 0 : (sy >= static_cast<float>(hl) ? hl - 1 : static_cast<int>(sy));
 }
 
 // What a texel does to the ray between fractions ta and tb.
@@ -288,13 +295,6 @@ HizCamera hiz_camera(const Mat4& projection) {
   HizCamera cam;
   for (int k = 0; k < 16; ++k) cam.inv[k] = static_cast<float>(inv.m[k]);
   return cam;
-}
-
-void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {
-  out[0] = i << level;
-  out[1] = j << level;
-  out[2] = i == p.width[level] - 1 ? p.width[0] : (i + 1) << level;
-  out[3] = j == p.height[level] - 1 ? p.height[0] : (j + 1) << level;
 }
 
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,

@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""Accuracy and cost of every march (and preset) on analytic scenes.
+
+Each scene's G-buffer is ray-cast exactly in float64 (tests/python/analytic.py),
+and so is every pixel's mirror hit; a march's reflected-uv buffer is scored
+against those hits as SPEC.md defines it: a pixel *reports* when its
+visibility > 1e-3, precision is the share of reports within 1.5 px of the exact
+visible hit, recall the share of exact visible hits reported within 1.5 px.
+Times are medians of --repeat runs, each backend and march in the same process.
+
+  /usr/bin/python3 bench/march_accuracy.py --sizes 640x480,1920x1080 --repeat 3
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "python"))
+sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(HERE, "..", "build")), "python"))
+
+import analytic as A  # noqa: E402
+import glint_core  # noqa: E402
+
+MAX_DISTANCE = 15.0
+SCENES = {
+    "floor": lambda: A.mirror_floor_scene("persp"),
+    "corridor": A.corridor_scene,
+    "wall": A.facing_wall_scene,
+}
+
+
+def score(uv, exact_uv, visible, tol=1.5):
+    h, w = visible.shape
+    rep = uv[..., 2] > 1e-3
+    err = np.hypot((uv[..., 0] - exact_uv[..., 0]) * w, (uv[..., 1] - exact_uv[..., 1]) * h)
+    good = rep & visible & (err <= tol)
+    precision = good.sum() / rep.sum() if rep.any() else 1.0
+    recall = good.sum() / visible.sum() if visible.any() else 1.0
+    return precision, recall
+
+
+def scene_data(name, w, h, cache_dir):
+    path = os.path.join(cache_dir, f"{name}_{w}x{h}.npz") if cache_dir else None
+    if path and os.path.exists(path):
+        return dict(np.load(path))
+    sc = SCENES[name]()
+    gb = A.render(sc, w, h)
+    mh = A.mirror_hits(sc, gb, MAX_DISTANCE, incident="view")
+    d = dict(position=gb["position"], normal=gb["normal"], projection=gb["projection"],
+             back=A.back_layer(sc, gb), exact_uv=mh["uv"], visible=mh["visible"])
+    if path:
+        os.makedirs(cache_dir, exist_ok=True)
+        np.savez(path, **d)
+    return d
+
+
+def timed(fn, repeat):
+    times, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append((time.perf_counter() - t0) * 1000.0)
+    return statistics.median(times), out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", default="640x480,1920x1080")
+    ap.add_argument("--scenes", default=",".join(SCENES))
+    ap.add_argument("--backends", default="cpu")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--cache", default=os.path.join(HERE, "..", "build", "bench-cache"),
+                    help="where exact G-buffers are kept between runs ('' for none)")
+    args = ap.parse_args()
+    runs = [("seed (defaults)", dict(march="seed"), False)]
+    for name, kw in glint_core.presets().items():
+        if kw["march"] in glint_core.marches() and not glint_core.march_details()[kw["march"]]["needs_mesh"]:
+            runs.append((name, kw, False))
+            if glint_core.march_details()[kw["march"]]["uses_back_position"]:
+                runs.append((name + " + back layer", kw, True))
+    print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |")
+    print("|---|---|---|---|---|---|---|---|")
+    for size in args.sizes.split(","):
+        w, h = (int(v) for v in size.split("x"))
+        for scene in args.scenes.split(","):
+            d = scene_data(scene, w, h, args.cache)
+            for backend in args.backends.split(","):
+                seed_ms = None
+                for label, kw, back in runs:
+                    extra = dict(back_position=d["back"]) if back else {}
+                    ms, uv = timed(lambda: glint_core.trace(d["position"], d["normal"], d["projection"],
+                                                            backend=backend, **kw, **extra), args.repeat)
+                    seed_ms = seed_ms or ms
+                    p, r = score(uv, d["exact_uv"], d["visible"])
+                    print(f"| {scene} | {w}x{h} | {backend} | {label} | {ms:.0f} | {ms / seed_ms:.2f} | "
+                          f"{p:.4f} | {r:.4f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
