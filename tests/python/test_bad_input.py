@@ -5,6 +5,7 @@ import pytest
 
 import analytic as A
 import glint_core
+from glint_tables import SCREEN_MARCHES
 
 H, W = 12, 16
 
@@ -196,7 +197,7 @@ def _nothing_seen(pos, mask):
     return out
 
 
-@pytest.mark.parametrize("march", ["seed", "linear"])
+@pytest.mark.parametrize("march", SCREEN_MARCHES)
 @pytest.mark.parametrize("where", ["x", "y", "z", "w"])
 @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
 def test_non_finite_positions_are_nothing_seen(march, where, value):

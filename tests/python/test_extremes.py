@@ -12,6 +12,7 @@ import pytest
 
 import analytic as A
 import glint_core
+from glint_tables import SCREEN_MARCHES
 
 HANG_SECONDS = 60.0
 BASE = dict(max_distance=15.0, resolution=0.3, steps=10, thickness=0.5)
@@ -61,7 +62,7 @@ def check_pipeline(out, gb):
 def run_all(gb, **params):
     """Both marches and the pipeline on one G-buffer, each under the guard."""
     kw = dict(BASE, **params)
-    for march in ("seed", "linear"):
+    for march in SCREEN_MARCHES:
         uv = guarded(glint_core.trace, gb["position"], gb["normal"], gb["projection"],
                      march=march, **kw)
         check_uv(uv, gb["position"].shape)
@@ -280,7 +281,7 @@ def _poisoned():
 def test_non_finite_and_zero_values_in_the_buffers():
     gb, picks = _poisoned()
     out = run_all(gb)
-    for march in ("seed", "linear"):
+    for march in SCREEN_MARCHES:
         uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march=march)
         # Those pixels themselves read as nothing seen / no normal: (0, 0, 0, 0).
         for idx in picks:
@@ -301,7 +302,7 @@ def test_single_pixel_exact_values():
     pos = np.array([[[0.0, 0.0, -3.0, 1.0]]], np.float32)
     nrm = np.array([[[0.0, 0.6, 0.8]]], np.float32)
     proj = A.projection_matrix("persp", 1, 1)
-    for march in ("seed", "linear"):
+    for march in SCREEN_MARCHES:
         uv = glint_core.trace(pos, nrm, proj, march=march, resolution=1.0)
         assert uv[0, 0, 2] == 0
         pos[0, 0, 3] = 0.0

@@ -38,6 +38,7 @@ import numpy as np
 import pytest
 
 import analytic as A
+from glint_tables import SCREEN_MARCHES
 
 pytestmark = pytest.mark.gl
 
@@ -194,7 +195,7 @@ def report(label, share, need, artifacts=None, cpu=None, gl=None):
 # --- stage by stage ----------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("march", ["seed", "linear"])
+@pytest.mark.parametrize("march", SCREEN_MARCHES)
 @pytest.mark.parametrize("name,w,h", list(gbuffers()))
 def test_trace_matches_cpu(gl, name, w, h, march, artifacts):
     g = gbuffer(gl, name, w, h)
@@ -231,7 +232,7 @@ def test_every_other_stage_matches_cpu(gl, name, w, h, artifacts):
 
 
 @pytest.mark.parametrize("name,w,h", [("persp-rough", 160, 90), ("ortho-rough", 128, 96), ("mesh-persp", 160, 90)])
-@pytest.mark.parametrize("march", ["seed", "linear"])
+@pytest.mark.parametrize("march", SCREEN_MARCHES)
 def test_pipeline_layers_match_cpu(gl, name, w, h, march, artifacts):
     g = gbuffer(gl, name, w, h)
     args = (g["position"], g["normal"], g["specular"], g["color"], g["projection"])

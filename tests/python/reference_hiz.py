@@ -1,0 +1,218 @@
+"""A plain, slow float64 reference of the "hiz" march, without the pyramid.
+
+docs/marches.md defines what the march finds: walking the reflected ray's
+screen-space line texel by texel from the texel after its origin, the first
+texel where the ray's depth span meets the texel's footprint range and the
+texel's tangent plane says Hit (the ray crosses it from the front, or is
+behind it by no more than a rounding slack) or Blocked (behind it within its
+thickness: report nothing). The core reaches the same texel through a min/max
+pyramid; this file visits every texel on the line, in Python floats (IEEE
+double), so agreeing with it shows the pyramid never skips one.
+
+Keep images small (tens of pixels a side). Returns float64 [H, W, 4].
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+CELL_NUDGE = 1.0 / 64.0
+PLANE_TOLERANCE = 1e-5
+BEHIND_SLACK = 1e-3
+FOOTPRINT_SPREAD = 0.5
+
+
+def _seen(p):
+    return p[3] > 0 and all(math.isfinite(v) for v in p)
+
+
+def _usable(n):
+    return all(math.isfinite(v) for v in n) and any(v != 0 for v in n)
+
+
+def _eye(proj):
+    """The incident direction rule of the core: a perspective camera mirrors
+    normalize(position); any other the ray from its eye (null vector of rows 0, 1, 3)."""
+    P = np.asarray(proj, float)
+    if np.allclose(P[3], [0, 0, -1, 0]):
+        return ("origin", None)
+    _, _, vt = np.linalg.svd(P[[0, 1, 3]])
+    e = vt[-1]
+    if abs(e[3]) > 1e-12 * np.linalg.norm(e):
+        return ("point", e[:3] / e[3])
+    d = e[:3] / np.linalg.norm(e[:3])
+    if P[2, :3] @ d < 0:
+        d = -d
+    return ("direction", d)
+
+
+def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5, back_position=None):
+    pos = np.asarray(position, float)
+    nrm = np.asarray(normal, float)
+    back = None if back_position is None else np.asarray(back_position, float)
+    P = np.asarray(projection, float)
+    H_inv = np.linalg.inv(P)
+    h, w = pos.shape[:2]
+    eye_kind, eye = _eye(P)
+    out = np.zeros((h, w, 4))
+
+    def texel_thickness(x, y):
+        if back is not None and _seen(back[y, x]) and -back[y, x, 2] > -pos[y, x, 2]:
+            return -back[y, x, 2] + pos[y, x, 2]
+        return thickness
+
+    def plane_row(x, y):
+        n = nrm[y, x, :3]
+        if not _usable(n):
+            return None
+        p = pos[y, x, :3]
+        k = n @ p
+        L = n @ H_inv[:3] - k * H_inv[3]
+        return L if L[2] != 0 else None
+
+    def plane_depth(L, sx, sy):
+        sz = -(L[0] * sx + L[1] * sy + L[3]) / L[2]
+        v = H_inv @ np.array([sx, sy, sz, 1.0])
+        return -v[2] / v[3]
+
+    def footprint(x, y):
+        d = -pos[y, x, 2]
+        t = texel_thickness(x, y)
+        lo = hi = d
+        L = plane_row(x, y)
+        if L is not None:
+            spread = FOOTPRINT_SPREAD * abs(d) + t
+            for cx, cy in ((x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)):
+                with np.errstate(all="ignore"):
+                    cd = plane_depth(L, cx * 2.0 / w - 1.0, cy * 2.0 / h - 1.0)
+                if not math.isfinite(cd):
+                    continue
+                cd = min(max(cd, d - spread), d + spread)
+                lo, hi = min(lo, cd), max(hi, cd)
+        return lo, hi + t
+
+    ranges = {}
+
+    def near_ok(v):
+        c = P @ np.append(v, 1.0)
+        return c[2] + c[3] >= 0 and c[3] > 0
+
+    for y in range(h):
+        for x in range(w):
+            p = pos[y, x]
+            if not _seen(p) or not _usable(nrm[y, x, :3]):
+                continue
+            frm = p[:3]
+            if eye_kind == "origin":
+                if not frm.any():
+                    continue
+                inc = frm / np.linalg.norm(frm)
+            elif eye_kind == "point":
+                inc = (frm - eye) / np.linalg.norm(frm - eye)
+            else:
+                inc = eye
+            n = nrm[y, x, :3] / np.linalg.norm(nrm[y, x, :3])
+            r = inc - 2.0 * (n @ inc) * n
+            r /= np.linalg.norm(r)
+            if not near_ok(frm):
+                continue
+            length = max_distance
+            n0 = (P[2] + P[3]) @ np.append(frm, 1.0)
+            n1 = (P[2] + P[3]) @ np.append(frm + r * length, 1.0)
+            if n1 < 0:
+                length *= n0 / (n0 - n1)
+            end = frm + r * length
+            c0, c1 = P @ np.append(frm, 1.0), P @ np.append(end, 1.0)
+            if not (c0[3] > 0 and c1[3] > 0) or not length > 0:
+                continue
+            f0 = np.array([(c0[0] / c0[3] * 0.5 + 0.5) * w, (c0[1] / c0[3] * 0.5 + 0.5) * h])
+            f1 = np.array([(c1[0] / c1[3] * 0.5 + 0.5) * w, (c1[1] / c1[3] * 0.5 + 0.5) * h])
+            d = f1 - f0
+            a0, a1 = frm / c0[3], end / c1[3]
+            b0, b1 = 1.0 / c0[3], 1.0 / c1[3]
+
+            def exit_of(box, t_end):
+                te = t_end
+                for ax in range(2):
+                    if d[ax] > 0:
+                        te = min(te, (box[2 + ax] - f0[ax]) / d[ax])
+                    elif d[ax] < 0:
+                        te = min(te, (box[ax] - f0[ax]) / d[ax])
+                return te
+
+            def depth(t):
+                return -(a0[2] + t * (a1[2] - a0[2])) / (b0 + t * (b1 - b0))
+
+            t_end = exit_of((0, 0, w, h), 1.0)
+            if not t_end > 0:
+                continue
+            t = exit_of((x, y, x + 1, y + 1), t_end)
+            result = None
+            while t < t_end:
+                q = f0 + t * d + np.sign(d) * CELL_NUDGE
+                i, j = min(max(int(math.floor(q[0])), 0), w - 1), min(max(int(math.floor(q[1])), 0), h - 1)
+                te = exit_of((i, j, i + 1, j + 1), t_end)
+                if not te > t:
+                    te = np.nextafter(t, np.inf)
+                if _seen(pos[j, i]):
+                    if (i, j) not in ranges:
+                        ranges[(i, j)] = footprint(i, j)
+                    lo, hi = ranges[(i, j)]
+                    za, zb = depth(t), depth(te)
+                    if max(za, zb) >= lo and min(za, zb) <= hi:
+                        outcome, th = _texel(pos, nrm, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
+                                             plane_row, plane_depth, texel_thickness, depth)
+                        if outcome == "blocked":
+                            break
+                        if outcome == "hit":
+                            result = th
+                            break
+                t = te
+            if result is not None:
+                q = f0 + result * d
+                out[y, x] = (q[0] / w, q[1] / h, 1.0, 1.0)
+    return out
+
+
+def _texel(pos, nrm, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, plane_depth,
+           texel_thickness, depth):
+    n = nrm[j, i, :3]
+    if not _usable(n):
+        return "hit", ta
+    u = n / np.linalg.norm(n)
+    p = pos[j, i, :3]
+    np_ = u @ p
+    tol = PLANE_TOLERANCE * np.linalg.norm(p)
+
+    def G(t):
+        return u @ (a0 + t * (a1 - a0)) - np_ * (b0 + t * (b1 - b0))
+
+    def B(t):
+        return b0 + t * (b1 - b0)
+
+    ga, gb = G(ta), G(tb)
+    a_behind, b_behind = ga < -tol * B(ta), gb < -tol * B(tb)
+    if not a_behind and not b_behind:
+        return "pass", ta
+    if not a_behind:
+        f = min(max(ga / (ga - gb), 0.0), 1.0)
+        return "hit", ta + (tb - ta) * f
+    L = plane_row(i, j)
+    if L is None:
+        return "hit", ta
+    thick = texel_thickness(i, j)
+
+    def behind_by(t):
+        q = f0 + t * d
+        return depth(t) - plane_depth(L, q[0] * 2.0 / w - 1.0, q[1] * 2.0 / h - 1.0)
+
+    slack = BEHIND_SLACK * abs(p[2])
+    da = behind_by(ta)
+    if da <= slack:
+        return "hit", ta
+    if da <= thick:
+        return "blocked", ta
+    if b_behind and behind_by(tb) <= thick:
+        return "blocked", tb
+    return "pass", ta
