@@ -23,6 +23,7 @@
 #include "glint/marches.h"
 #include "glint/pipeline.h"
 #include "glint/png.h"
+#include "glint/presets.h"
 
 namespace {
 
@@ -42,6 +43,8 @@ Input layers:
   --normal-layer NAME     view-space normal                     [normal]
   --specular-layer NAME   rgb specular colour, a = shininess     [specular]
   --color-layer NAME      base colour (linear)                   [color]
+  --back-position-layer NAME  optional: the surface behind each pixel's
+                          own, for marches that use true thickness [back_position]
 
 Projection (default: the input's glintProjection header attribute):
   --projection "P00 P01 ... P33"      16 numbers, rows as printed:
@@ -55,6 +58,7 @@ Pipeline:
   --steps N               iteration budget; per march, below      [10]
   --thickness F           hit depth tolerance, view units        [0.5]
   --march NAME            one of the marches below               [seed]
+  --preset NAME           a preset's trace options (below); flags after it override
   --blur-size N           box half-width in taps, 0 = no blur    [8]
   --blur-separation F     pixels between taps, >= 1              [1]
   --combine over|seed                                            [over]
@@ -71,7 +75,7 @@ to stdout. Example:
   glint-exr --perspective 50,0.1,100 --png out.png gbuffer.exr out.exr
 )";
 
-// The marches and what each option means for them, from the core's table.
+// The marches and presets, and what each option means, from the core's tables.
 void print_marches() {
   std::printf("\nMarches (--march):\n");
   for (const glint::MarchInfo& m : glint::march_table()) {
@@ -82,6 +86,12 @@ void print_marches() {
       std::printf("             --%s: %s\n", flag.c_str(), k.meaning);
     }
   }
+  std::printf("\nPresets (--preset):\n");
+  for (const glint::Preset& p : glint::presets())
+    std::printf("  %-9s --march %s --steps %d --resolution %g --thickness %g --max-distance %g\n"
+                "            %s\n",
+                p.name, glint::to_string(p.trace.march), p.trace.steps, p.trace.resolution,
+                p.trace.thickness, p.trace.max_distance, p.description);
 }
 
 // A bad command line: message for stderr, exit status 2.
@@ -92,7 +102,8 @@ struct UsageError {
 struct Args {
   std::string input, output, png;
   std::string position_layer = "position", normal_layer = "normal", specular_layer = "specular",
-              color_layer = "color";
+              color_layer = "color", back_layer = "back_position";
+  bool back_layer_given = false;  // --back-position-layer named it: it must be there
   std::optional<glint::Mat4> projection;  // from --projection
   std::optional<std::vector<double>> perspective, orthographic;
   glint::PipelineOptions opt;
@@ -168,6 +179,10 @@ Args parse_args(int argc, char** argv, bool& help) {
     if (flag == "--position-layer") a.position_layer = next();
     else if (flag == "--normal-layer") a.normal_layer = next();
     else if (flag == "--specular-layer") a.specular_layer = next();
+    else if (flag == "--back-position-layer") {
+      a.back_layer = next();
+      a.back_layer_given = true;
+    }
     else if (flag == "--color-layer") a.color_layer = next();
     else if (flag == "--projection") {
       const auto v = parse_list(flag, next(), 16);
@@ -180,7 +195,14 @@ Args parse_args(int argc, char** argv, bool& help) {
     else if (flag == "--resolution") a.opt.trace.resolution = static_cast<float>(parse_double(flag, next()));
     else if (flag == "--steps") a.opt.trace.steps = parse_int(flag, next());
     else if (flag == "--thickness") a.opt.trace.thickness = static_cast<float>(parse_double(flag, next()));
-    else if (flag == "--march") {
+    else if (flag == "--preset") {
+      const std::string v = next();
+      try {
+        a.opt.trace = glint::preset(v.c_str()).trace;  // later flags still override it
+      } catch (const glint::InvalidArgument& e) {
+        throw UsageError{flag + ": " + std::string(e.what()).substr(std::string(e.what()).find(": ") + 2)};
+      }
+    } else if (flag == "--march") {
       const std::string v = next();
       try {
         a.opt.trace.march = glint::parse_march(v);
@@ -284,6 +306,9 @@ int run(const Args& a) {
   pin.normal = layer(in, a.input, a.normal_layer, "--normal-layer");
   pin.specular = layer(in, a.input, a.specular_layer, "--specular-layer");
   pin.color = layer(in, a.input, a.color_layer, "--color-layer");
+  // The back-face layer is optional: used where the file has it.
+  if (a.back_layer_given || in.layers.count(a.back_layer))
+    pin.back_position = layer(in, a.input, a.back_layer, "--back-position-layer");
   const int w = pin.position.width, h = pin.position.height;
   const double aspect = static_cast<double>(w) / h;
 

@@ -81,7 +81,8 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                        const pyb::handle& material_index, const pyb::handle& materials,
                        const pyb::handle& projection, int width, int height, const pyb::handle& uvs,
                        const pyb::handle& tangents, const pyb::handle& material_normal_map,
-                       const pyb::handle& normal_maps, const std::string& backend, int threads) {
+                       const pyb::handle& normal_maps, bool back_layer, const std::string& backend,
+                       int threads) {
   // T is the length of positions; the other per-triangle arrays must match it.
   Mesh mesh;
   mesh.positions = float32_values(positions, "positions", {-1, 3, 3}, "(T, 3, 3)");
@@ -134,6 +135,7 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
 
   const Mat4 proj = projection_from_array(projection);
   RasterInputs in{mesh, table, images, proj, width, height};
+  in.back_layer = back_layer;
   validate(in);
   auto be = get_backend(backend, threads);
   GBufferImages g;
@@ -145,6 +147,7 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
   out["position"] = array_from_image(g.position);
   out["normal"] = array_from_image(g.normal);
   out["specular"] = array_from_image(g.specular);
+  if (back_layer) out["back_position"] = array_from_image(g.back_position);
   return out;
 }
 
@@ -154,15 +157,16 @@ void bind_raster(pyb::module_& m) {
   m.def("rasterize", &py_rasterize, "positions"_a, "normals"_a, "material_index"_a, "materials"_a,
         "projection"_a, "width"_a, "height"_a, pyb::kw_only(), "uvs"_a = pyb::none(),
         "tangents"_a = pyb::none(), "material_normal_map"_a = pyb::none(),
-        "normal_maps"_a = pyb::tuple(), "backend"_a = "cpu", "threads"_a = 0,
+        "normal_maps"_a = pyb::tuple(), "back_layer"_a = false, "backend"_a = "cpu", "threads"_a = 0,
         "G-buffers from view-space triangles (Blender camera space, -Z forward).\n"
         "positions, normals: float32 (T, 3, 3); material_index: int32 (T,);\n"
         "materials: (M, 4) = (specular r, g, b, shininess 0..127.75);\n"
         "uvs (T, 3, 2), tangents (T, 3, 4) (xyz + bitangent sign), material_normal_map int32 (M,)\n"
         "(-1 = none) and normal_maps (float32 (h, w, 3|4) images) for tangent-space normal maps.\n"
-        "Returns dict(position, normal, specular) of float32 (height, width, 4), row 0 at the\n"
-        "bottom; pixels no triangle covers are all zeros. Triangles with a non-finite corner\n"
-        "are skipped.");
+        "Returns dict(position, normal, specular) of float32 (height, width, 4), plus\n"
+        "back_position with back_layer=True: the nearest back-facing surface behind each\n"
+        "pixel's own (w = 0 where none), for trace(back_position=...). Row 0 at the bottom;\n"
+        "pixels no triangle covers are all zeros. Triangles with a non-finite corner are skipped.");
 }
 
 }  // namespace glint::py

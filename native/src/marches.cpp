@@ -33,7 +33,8 @@ const std::vector<MarchInfo>& march_table() {
        {{"max_distance", "length of the reflected ray, view units"},
         {"steps", "walk budget per ray, in cells per pyramid level (steps x levels cells at most)"},
         {"thickness",
-         "depth of a surface behind its front, view units, where no back_position says better"}},
+         "how far behind a surface is solid (a ray there is blocked: nothing reported), view "
+         "units, where no back_position gives the real depth"}},
        false, true, &cpu::trace_hiz, nullptr},
   };
   return table;

@@ -13,6 +13,7 @@ BUILD_DIR = os.environ.get("GLINT_BUILD_DIR", "/work/main/build")
 sys.path.insert(0, os.path.join(BUILD_DIR, "python"))
 
 import glint_core  # noqa: E402
+import analytic as A  # noqa: E402
 
 
 def perspective(fov_y, aspect, near, far):
@@ -333,3 +334,36 @@ def test_gl_backend_agrees_with_the_cpu_reference():
     both = (cpu["position"][..., 3] == 1) & (gl["position"][..., 3] == 1)
     close = np.abs(cpu["position"][both] - gl["position"][both]).max(axis=-1) < 1e-3
     assert close.mean() > 0.95  # the rest: a different triangle won a near depth tie at an edge
+
+
+def test_back_layer_is_the_far_side_of_a_closed_box():
+    """back_layer=True: behind every pixel that sees the box, its exit point
+    along the pixel's view ray (slab method, computed here); nothing elsewhere."""
+    w, h = 64, 48
+    proj = A.projection_matrix("persp", w, h)
+    lo, hi = np.array([-1.0, -1.0, -6.0]), np.array([1.0, 1.0, -4.0])
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = []
+    centre = corners.mean(axis=0)
+    for q in quads:
+        for t in ((q[0], q[1], q[2]), (q[0], q[2], q[3])):
+            a, b, c = corners[list(t)]
+            tris.append(t if np.cross(b - a, c - a) @ (a - centre) > 0 else (t[0], t[2], t[1]))
+    pos = corners[np.array(tris)].astype(np.float32)
+    g = glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(tris), np.int32),
+                             np.zeros((1, 4), np.float32), proj, w, h, back_layer=True)
+    seen = g["position"][..., 3] > 0
+    back = g["back_position"][..., 3] > 0
+    assert seen.sum() > 500 and np.array_equal(seen, back)
+    nx, ny = A.pixel_ndc(w, h)
+    _, d = A.unproject_rays(proj, nx, ny)
+    d = d.reshape(h, w, 3)
+    with np.errstate(divide="ignore"):
+        t_far = np.min(np.maximum(lo / d, hi / d), axis=-1)  # rays start at the eye (origin)
+    expect = d * t_far[..., None]
+    err = np.abs(g["back_position"][..., :3] - expect)[back].max()
+    assert err < 1e-4 * 6.0, err
+    # Without the flag there is no such layer.
+    assert "back_position" not in glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(tris), np.int32),
+                                                       np.zeros((1, 4), np.float32), proj, w, h)

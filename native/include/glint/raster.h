@@ -34,12 +34,18 @@ struct RasterInputs {
   Mat4 projection;
   int width = 0;
   int height = 0;
+  // Also rasterize the back-face layer (GBufferImages::back_position).
+  bool back_layer = false;
 };
 
 struct GBufferImages {
   Image position;  // (x, y, z, 1) where a triangle covers the pixel centre, 0 elsewhere
   Image normal;    // unit view-space normal (flipped toward the eye on back faces), w = 1
   Image specular;  // (specular rgb, shininess_to_alpha(shininess))
+  // With RasterInputs::back_layer: the nearest back-facing surface strictly
+  // behind the front one, (x, y, z, 1), 0 where there is none. A closed
+  // object's far side, so back - front is its thickness along the view ray.
+  Image back_position;
 };
 
 // Throws InvalidArgument naming the bad field (sizes, material indices).

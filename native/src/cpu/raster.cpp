@@ -362,6 +362,10 @@ Vec3 apply_normal_map(const RasterInputs& in, const Image& map, size_t tri, cons
 
 }  // namespace
 
+// A back face must lie this share of the front's view distance behind it to
+// count: coplanar duplicates and the front triangle's own back side do not.
+constexpr double kBackSeparation = 1e-6;
+
 GBufferImages rasterize(const RasterInputs& in, int threads) {
   validate(in);
   const int width = in.width, height = in.height;
@@ -384,54 +388,79 @@ GBufferImages rasterize(const RasterInputs& in, int threads) {
     std::vector<std::vector<uint32_t>> bins;  // per band: indices into tris, in triangle order
   };
 
-  for (size_t begin = 0; begin < count; begin += kChunk) {
-    const size_t n = std::min(kChunk, count - begin);
-    planes.resize(n);
-    // Slices are contiguous runs of triangles so that walking them in order
-    // keeps submission order, which makes depth ties deterministic.
-    const int slices = static_cast<int>(std::min<size_t>((n + 1023) / 1024, size_t(nthreads) * 4));
-    std::vector<Slice> slice(slices);
-    auto setup_slice = [&](int s) {
-      const size_t a = n * s / slices, b = n * (s + 1) / slices;
-      Slice& sl = slice[s];
-      sl.bins.assign(bands, {});
-      for (size_t k = a; k < b; ++k) {
-        const size_t tri = begin + k;
-        const float* corners = mesh.positions.data() + tri * 9;
-        const size_t first = sl.tris.size();
-        setup_triangle(corners, proj, width, height, static_cast<int32_t>(tri), sl.tris);
-        if (sl.tris.size() == first) continue;
-        if (!make_plane(corners, proj, planes[k])) {
-          sl.tris.resize(first);  // seen edge-on through the eye: covers nothing
-          continue;
+  // One pass over every triangle: fragment(triangle, plane, pixel index,
+  // view distance) for each pixel centre it covers, bands of rows in parallel
+  // (a pixel is only ever touched by the thread that owns its band).
+  auto raster_pass = [&](auto&& fragment) {
+    for (size_t begin = 0; begin < count; begin += kChunk) {
+      const size_t n = std::min(kChunk, count - begin);
+      planes.resize(n);
+      // Slices are contiguous runs of triangles so that walking them in order
+      // keeps submission order, which makes depth ties deterministic.
+      const int slices = static_cast<int>(std::min<size_t>((n + 1023) / 1024, size_t(nthreads) * 4));
+      std::vector<Slice> slice(slices);
+      auto setup_slice = [&](int s) {
+        const size_t a = n * s / slices, b = n * (s + 1) / slices;
+        Slice& sl = slice[s];
+        sl.bins.assign(bands, {});
+        for (size_t k = a; k < b; ++k) {
+          const size_t tri = begin + k;
+          const float* corners = mesh.positions.data() + tri * 9;
+          const size_t first = sl.tris.size();
+          setup_triangle(corners, proj, width, height, static_cast<int32_t>(tri), sl.tris);
+          if (sl.tris.size() == first) continue;
+          if (!make_plane(corners, proj, planes[k])) {
+            sl.tris.resize(first);  // seen edge-on through the eye: covers nothing
+            continue;
+          }
+          for (size_t q = first; q < sl.tris.size(); ++q) {
+            const ScreenTri& t = sl.tris[q];
+            for (int band = t.j_lo / band_rows; band <= t.j_hi / band_rows; ++band)
+              sl.bins[band].push_back(static_cast<uint32_t>(q));
+          }
         }
-        for (size_t q = first; q < sl.tris.size(); ++q) {
-          const ScreenTri& t = sl.tris[q];
-          for (int band = t.j_lo / band_rows; band <= t.j_hi / band_rows; ++band)
-            sl.bins[band].push_back(static_cast<uint32_t>(q));
-        }
-      }
-    };
-    parallel_rows(0, slices, threads, setup_slice);  // binning allocates: failures come back here
-    parallel_rows(0, bands, threads, [&](int band) {
-      const int r0 = band * band_rows, r1 = std::min(height, r0 + band_rows) - 1;
-      for (const Slice& sl : slice) {
-        for (uint32_t q : sl.bins[band]) {
-          const ScreenTri& t = sl.tris[q];
-          const TriPlane& pl = planes[t.tri - begin];
-          for_each_span(t, std::max(t.j_lo, r0), std::min(t.j_hi, r1), [&](int j, int i0, int i1) {
-            const size_t row = static_cast<size_t>(j) * width;
-            for (int i = i0; i <= i1; ++i) {
-              double b[3];
-              if (!barycentric(pl, i, j, inv_w2, inv_h2, b)) continue;
-              const double d = -(b[0] * pl.z[0] + b[1] * pl.z[1] + b[2] * pl.z[2]);
-              if (d < depth[row + i]) {
-                depth[row + i] = d;
-                winner[row + i] = t.tri;
+      };
+      parallel_rows(0, slices, threads, setup_slice);  // binning allocates: failures come back here
+      parallel_rows(0, bands, threads, [&](int band) {
+        const int r0 = band * band_rows, r1 = std::min(height, r0 + band_rows) - 1;
+        for (const Slice& sl : slice) {
+          for (uint32_t q : sl.bins[band]) {
+            const ScreenTri& t = sl.tris[q];
+            const TriPlane& pl = planes[t.tri - begin];
+            for_each_span(t, std::max(t.j_lo, r0), std::min(t.j_hi, r1), [&](int j, int i0, int i1) {
+              const size_t row = static_cast<size_t>(j) * width;
+              for (int i = i0; i <= i1; ++i) {
+                double b[3];
+                if (!barycentric(pl, i, j, inv_w2, inv_h2, b)) continue;
+                fragment(t.tri, pl, row + i, -(b[0] * pl.z[0] + b[1] * pl.z[1] + b[2] * pl.z[2]));
               }
-            }
-          });
+            });
+          }
         }
+      });
+    }
+  };
+
+  raster_pass([&](int32_t tri, const TriPlane&, size_t px, double d) {
+    if (d < depth[px]) {
+      depth[px] = d;
+      winner[px] = tri;
+    }
+  });
+
+  // The back-face layer: the nearest back-facing triangle strictly behind
+  // each pixel's front surface (a closed object's far side), which is what
+  // tells a march how thick the object in front really is.
+  std::vector<double> back_depth;
+  std::vector<int32_t> back_winner;
+  if (in.back_layer) {
+    back_depth.assign(pixels, std::numeric_limits<double>::infinity());
+    back_winner.assign(pixels, -1);
+    raster_pass([&](int32_t tri, const TriPlane& pl, size_t px, double d) {
+      if (pl.back && winner[px] >= 0 && d > depth[px] + kBackSeparation * std::fabs(depth[px]) &&
+          d < back_depth[px]) {
+        back_depth[px] = d;
+        back_winner[px] = tri;
       }
     });
   }
@@ -485,6 +514,25 @@ GBufferImages rasterize(const RasterInputs& in, int threads) {
       so[3] = shininess_to_alpha(mat.shininess);
     }
   });
+  if (in.back_layer) {
+    out.back_position = Image(width, height);
+    parallel_rows(0, height, threads, [&](int j) {
+      TriPlane pl;
+      for (int i = 0; i < width; ++i) {
+        const int32_t id = back_winner[static_cast<size_t>(j) * width + i];
+        if (id < 0) continue;
+        const float* corners = mesh.positions.data() + static_cast<size_t>(id) * 9;
+        double b[3];
+        if (!make_plane(corners, proj, pl) || !barycentric(pl, i, j, inv_w2, inv_h2, b)) continue;
+        const Vec3 p = interp3(corners, 3, b);
+        float* po = out.back_position.px(i, j);
+        po[0] = static_cast<float>(p.x);
+        po[1] = static_cast<float>(p.y);
+        po[2] = static_cast<float>(p.z);
+        po[3] = 1.0f;
+      }
+    });
+  }
   return out;
 }
 
