@@ -19,17 +19,19 @@ def settings_dict(glint) -> dict:
     """The scene's Glint settings as plain values."""
     return {
         "max_distance": glint.max_distance, "resolution": glint.resolution, "steps": glint.steps,
-        "thickness": glint.thickness, "march": glint.march, "blur_size": glint.blur_size,
+        "thickness": glint.thickness, "march": glint.march_name, "preset": glint.preset_name,
+        "blur_size": glint.blur_size,
         "backend": glint.backend, "debug_view": glint.debug_view, "write_layers_exr": glint.write_layers_exr,
     }
 
 
-def rasterize(core, exp: gather.SceneExport, backend: str):
-    """The G-buffer of an export (with its normal maps, if any) on ``backend``."""
+def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = False):
+    """The G-buffer of an export (with its normal maps, if any) on ``backend``; with
+    ``back_layer``, also the surface behind each pixel (the march's true thickness)."""
     t = exp.triangles
-    kwargs = {}
+    kwargs = {"back_layer": True} if back_layer else {}
     if t.uvs is not None and exp.normal_maps:
-        kwargs = dict(uvs=t.uvs, tangents=t.tangents, material_normal_map=exp.material_normal_map,
+        kwargs.update(uvs=t.uvs, tangents=t.tangents, material_normal_map=exp.material_normal_map,
                       normal_maps=exp.normal_maps)
     cam = exp.camera
     return core.rasterize(t.positions, t.normals, t.material_index, exp.materials,
@@ -85,7 +87,10 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         requested = settings_logic.backend_name(values["backend"])
         with timings.measure("rasterize"):
             backend = resolve_backend(core, requested)
-            gbuf, used = _with_backend(core, backend, requested, lambda b: rasterize(core, exp, b))
+            kwargs = settings_logic.trace_kwargs(values, core.presets())
+            back_layer = core.march_details()[kwargs["march"]]["uses_back_position"]
+            gbuf, used = _with_backend(core, backend, requested,
+                                       lambda b: rasterize(core, exp, b, back_layer))
         progress.check()
         position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
         mask = compositing.mask_image(position, specular)
@@ -95,7 +100,8 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             report.status, report.message = "skipped", "no reflective pixel on screen"
             report.timings_ms = timings.ms
             return report
-        kwargs = settings_logic.trace_kwargs(values)
+        if back_layer:
+            kwargs["back_position"] = gbuf["back_position"]
         n_trace = compositing.trace_normals(normal, position, specular)
         proj32 = cam.projection.astype(np.float32)
         with timings.measure("trace"):

@@ -135,7 +135,7 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
             return {"CANCELLED"}
         values = settings_dict(scene.glint)
         backend = settings_logic.backend_name(values["backend"])
-        kwargs = settings_logic.trace_kwargs(values)
+        kwargs = settings_logic.trace_kwargs(values, core.presets())
         self._result = {"timings": timings}
 
         def work():

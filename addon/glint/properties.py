@@ -8,6 +8,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
+from . import native
 from .logic import compositing as cg
 from .logic import settings as sl
 
@@ -26,12 +27,67 @@ def _on_enabled(self, context):
         compositor.remove(scene)
 
 
+def _core_tables():
+    """(march details, presets, preset descriptions) from the core, or empty
+    tables when it cannot be loaded (the panel then says why)."""
+    core = native.load()
+    if core is None:
+        return {}, {}, {}
+    return core.march_details(), core.presets(), core.preset_descriptions()
+
+
+# Blender keeps only pointers into the strings of dynamic enum items: the
+# lists must outlive the call that returned them.
+_items = {"march": [], "preset": []}
+
+
+def _march_items(self, context):
+    _items["march"] = sl.march_items(_core_tables()[0], current=self.march_name)
+    return _items["march"]
+
+
+def _preset_items(self, context):
+    _, presets, descriptions = _core_tables()
+    _items["preset"] = sl.preset_items(presets, descriptions, current=self.preset_name)
+    return _items["preset"]
+
+
+def _number_of(items, identifier):
+    for item in items:
+        if item[0] == identifier:
+            return item[3]
+    return 0
+
+
+def _get_march(self):
+    return _number_of(_march_items(self, None), self.march_name)
+
+
+def _set_march(self, number):
+    for item in _march_items(self, None):
+        if item[3] == number:
+            self.march_name = item[0]
+
+
+def _get_preset(self):
+    return _number_of(_preset_items(self, None), self.preset_name)
+
+
+def _set_preset(self, number):
+    for item in _preset_items(self, None):
+        if item[3] == number:
+            self.preset_name = item[0]
+
+
 def _on_preset(self, context):
-    if self.preset == "CUSTOM" or _guard["busy"]:
+    if self.preset_name == sl.CUSTOM or _guard["busy"]:
+        return
+    presets = _core_tables()[1]
+    if not presets:
         return
     _guard["busy"] = True
     try:
-        for key, value in sl.preset_values(self.preset).items():
+        for key, value in sl.preset_values(presets, self.preset_name).items():
             setattr(self, key, value)
     finally:
         _guard["busy"] = False
@@ -41,14 +97,11 @@ def _on_preset(self, context):
 def _on_raw(self, context):
     if _guard["busy"]:
         return
-    values = {k: getattr(self, k) for k in sl.PRESET_KEYS}
-    match = sl.matching_preset(values)
-    if match != self.preset:
-        _guard["busy"] = True
-        try:
-            self.preset = match
-        finally:
-            _guard["busy"] = False
+    presets = _core_tables()[1]
+    values = {k: getattr(self, k) for k in sl.QUALITY_KEYS}
+    match = sl.matching_preset(values, presets) if presets else self.preset_name
+    if match != self.preset_name:
+        self.preset_name = match
     _on_compositor_setting(self, context)
 
 
@@ -73,15 +126,20 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
     enabled: BoolProperty(
         name="Glint", default=False, update=_on_enabled,
         description="Composite screen-space reflections into every rendered frame")
-    preset: EnumProperty(name="Quality", items=sl.PRESET_ITEMS, default="MEDIUM", update=_on_preset,
-                         description="Quality preset: sets resolution, steps, blur size and march")
+    # Stored by name: the enums below list whatever the core's tables hold.
+    preset_name: StringProperty(default=sl.DEFAULT_PRESET, options={"HIDDEN"})
+    march_name: StringProperty(default="SEED", options={"HIDDEN"})
+    preset: EnumProperty(name="Quality", items=_preset_items, get=_get_preset, set=_set_preset,
+                         update=_on_preset,
+                         description="Quality preset, measured in docs/marches.md: sets the march, "
+                                     "resolution and steps; rendering follows the core's preset")
     max_distance: _param("max_distance", float, update=_on_compositor_setting)
     resolution: _param("resolution", float)
     steps: _param("steps", int)
     thickness: _param("thickness", float, update=_on_compositor_setting)
     blur_size: _param("blur_size", int)
-    march: EnumProperty(name="March", items=sl.MARCH_MODES, default="SEED", update=_on_raw,
-                        description="How rays are marched in screen space")
+    march: EnumProperty(name="March", items=_march_items, get=_get_march, set=_set_march,
+                        update=_on_raw, description="How rays are marched in screen space")
     backend: EnumProperty(name="Backend", items=sl.BACKENDS, default="AUTO",
                           description="Where the G-buffer and the trace run")
     debug_view: EnumProperty(name="Debug View", items=cg.DEBUG_VIEWS, default="NONE",

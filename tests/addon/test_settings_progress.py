@@ -7,26 +7,58 @@ s = load_logic("settings")
 pr = load_logic("progress")
 
 
-def test_medium_preset_is_the_seeds_defaults():
-    v = s.preset_values("MEDIUM")
-    assert v["resolution"] == 0.3 and v["steps"] == 10 and v["blur_size"] == 8 and v["march"] == "SEED"
+# Stand-ins for the core's tables, shaped as glint_core returns them.
+PRESETS = {
+    "draft": {"max_distance": 15.0, "resolution": 0.3, "steps": 5, "thickness": 0.5, "march": "hiz"},
+    "balanced": {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "hiz"},
+}
+DESCRIPTIONS = {"draft": "short walk", "balanced": "the knee"}
+DETAILS = {
+    "seed": {"description": "two-pass", "options": {"steps": "bisection iterations"}, "needs_mesh": False,
+             "uses_back_position": False, "gl": True},
+    "hiz": {"description": "pyramid walk", "options": {"steps": "cells per level"}, "needs_mesh": False,
+            "uses_back_position": True, "gl": False},
+}
+
+
+def test_parameter_defaults_are_the_seeds():
     for key in ("max_distance", "resolution", "steps", "thickness", "blur_size"):
         assert key in s.PARAMETERS
     assert s.PARAMETERS["max_distance"][0] == 15.0 and s.PARAMETERS["thickness"][0] == 0.5
 
 
-def test_presets_leave_scene_scale_parameters_alone():
-    for name in s.PRESETS:
-        assert "max_distance" not in s.PRESETS[name] and "thickness" not in s.PRESETS[name]
+def test_enum_items_come_from_the_core_tables():
+    marches = s.march_items(DETAILS)
+    assert [i[0] for i in marches] == ["SEED", "HIZ"] and [i[3] for i in marches] == [0, 1]
+    assert "cells per level" in marches[1][2] and "Runs on the CPU" in marches[1][2]
+    presets = s.preset_items(PRESETS, DESCRIPTIONS)
+    assert [i[0] for i in presets] == ["DRAFT", "BALANCED", "CUSTOM"]
+    assert "the knee" in presets[1][2] and "steps 10" in presets[1][2]
+    assert s.DEFAULT_PRESET == "BALANCED"
+    # Without the core, the stored choice is still listed (and Custom).
+    assert [i[0] for i in s.march_items({}, current="HIZ")] == ["HIZ"]
+    assert [i[0] for i in s.preset_items({}, {}, current="HIGH")] == ["HIGH", "CUSTOM"]
+
+
+def test_presets_set_quality_only():
+    v = s.preset_values(PRESETS, "BALANCED")
+    assert v == {"march": "HIZ", "resolution": 0.3, "steps": 10}
+    with pytest.raises(ValueError):
+        s.preset_values(PRESETS, "ULTRA")
 
 
 def test_matching_preset():
-    assert s.matching_preset({"resolution": 0.6, "steps": 20, "blur_size": 8, "march": "SEED"}) == "HIGH"
-    assert s.matching_preset({"resolution": 0.6000001, "steps": 20, "blur_size": 8, "march": "SEED"}) == "HIGH"
-    assert s.matching_preset({"resolution": 0.5, "steps": 20, "blur_size": 8, "march": "SEED"}) == "CUSTOM"
-    assert s.matching_preset({"resolution": 0.3, "steps": 10, "blur_size": 8, "march": "LINEAR"}) == "CUSTOM"
-    with pytest.raises(ValueError):
-        s.preset_values("ULTRA")
+    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "HIZ"}, PRESETS) == "BALANCED"
+    assert s.matching_preset({"resolution": 0.3000001, "steps": 5, "march": "HIZ"}, PRESETS) == "DRAFT"
+    assert s.matching_preset({"resolution": 0.3, "steps": 11, "march": "HIZ"}, PRESETS) == "CUSTOM"
+    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "SEED"}, PRESETS) == "CUSTOM"
+
+
+def test_a_named_preset_follows_the_core():
+    raw = {"max_distance": 7, "resolution": 1.0, "steps": 64, "thickness": 0.2, "march": "SEED"}
+    kw = s.trace_kwargs(dict(raw, preset="BALANCED"), PRESETS)
+    assert kw == {"max_distance": 7.0, "resolution": 0.3, "steps": 10, "thickness": 0.2, "march": "hiz"}
+    assert s.trace_kwargs(dict(raw, preset="CUSTOM"), PRESETS)["march"] == "seed"
 
 
 def test_trace_kwargs():

@@ -91,7 +91,9 @@ g = bpy.data.node_groups[cg.GROUP_NAME]
 res['blur'] = [g.nodes['blur'].size_x, g.nodes['blur'].size_y]
 res['switch'] = [g.nodes['show_reflection'].check, g.nodes['show_debug'].check]
 s.glint.preset = 'HIGH'
-res['preset'] = [s.glint.resolution, s.glint.steps, s.glint.blur_size]
+res['preset'] = [s.glint.march, s.glint.resolution, s.glint.steps, s.glint.blur_size]
+from glint import native as glint_native
+res['core_high'] = glint_native.load().presets()['high']
 s.glint.steps = 7
 res['preset_after_edit'] = s.glint.preset
 s.glint.enabled = True  # again: nothing may be duplicated
@@ -118,7 +120,9 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
                                       "Visibility")])
     assert res["exr_node"] is True
     assert res["blur"] == [5, 5] and res["switch"] == [True, False]
-    assert res["preset"] == [pytest.approx(0.6), 20, 8] and res["preset_after_edit"] == "CUSTOM"
+    high = res["core_high"]  # the add-on's presets are the core's
+    assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"], 5]
+    assert res["preset_after_edit"] == "CUSTOM"
     assert res["nodes_on"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer", "Glint",
                                       "Glint EXR"])
     assert res["user_off"] == res["user_before"]

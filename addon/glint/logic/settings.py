@@ -1,12 +1,13 @@
 """The pipeline's parameters: limits, quality presets, and the keyword set the core takes.
 
 The limits mirror ``native/include/glint/options.h`` so that the panel never
-offers a value the core rejects; the presets only touch the parameters that
-trade quality for time, never the scene-scale ones (max distance, thickness).
+offers a value the core rejects; the presets (the core's) only touch the
+parameters that trade quality for time, never the scene-scale ones (max
+distance, thickness).
 """
 from __future__ import annotations
 
-from typing import Dict, Mapping
+from typing import Dict, List, Mapping, Tuple
 
 # name: (default, min, max, soft_min, soft_max, description)
 PARAMETERS = {
@@ -15,17 +16,12 @@ PARAMETERS = {
     "resolution": (0.3, 0.0, 1.0, 0.0, 1.0,
                    "Share of the on-screen pixels the coarse pass visits (the seed's resolution)"),
     "steps": (10, 0, 1000, 0, 64,
-              "Bisection iterations of the second pass (the seed's steps)"),
+              "Iteration budget; what it counts for each march is in the March tooltip"),
     "thickness": (0.5, 1e-5, 1e6, 0.01, 10.0,
-                  "How far behind a surface a ray still counts as a hit, in scene units"),
+                  "How deep surfaces are behind their front, in scene units (per march: March tooltip)"),
     "blur_size": (8, 0, 128, 0, 32,
                   "Half-width of the box blur for rough surfaces: a (2 size + 1)^2 box, 0 = none"),
 }
-
-MARCH_MODES = (
-    ("SEED", "Seed (two-pass)", "The chapter's coarse pass plus bisection"),
-    ("LINEAR", "Linear", "The book's older single march in view-space steps"),
-)
 
 BACKENDS = (
     ("AUTO", "Auto", "OpenGL when a context can be made, else the CPU"),
@@ -33,52 +29,74 @@ BACKENDS = (
     ("CPU", "CPU", "The CPU reference backend"),
 )
 
-# Values are the preset's parameters; anything not listed is left as it is.
-PRESETS: Dict[str, Dict[str, object]] = {
-    "LOW": {"resolution": 0.15, "steps": 5, "blur_size": 4, "march": "SEED"},
-    "MEDIUM": {"resolution": 0.3, "steps": 10, "blur_size": 8, "march": "SEED"},  # the seed's
-    "HIGH": {"resolution": 0.6, "steps": 20, "blur_size": 8, "march": "SEED"},
-}
-PRESET_ITEMS = (
-    ("LOW", "Low", "Coarse march, small blur: fastest"),
-    ("MEDIUM", "Medium", "The seed chapter's defaults"),
-    ("HIGH", "High", "Twice the coarse samples and bisection steps"),
-    ("CUSTOM", "Custom", "The raw parameters below as set"),
-)
-
-PRESET_KEYS = ("resolution", "steps", "blur_size", "march")
+# The marches and presets are the core's (glint_core.march_details(), presets()):
+# the functions below turn those tables into Blender enum items and settings,
+# and take them as arguments so that they are tested without the module.
+CUSTOM = "CUSTOM"
+DEFAULT_PRESET = "BALANCED"  # SPEC.md names it; its values are whatever the core says
+# What a preset sets; max_distance and thickness describe the scene, not the quality.
+QUALITY_KEYS = ("march", "resolution", "steps")
+MISSING = "glint_core is not loaded, so its marches and presets cannot be listed"
 
 
-def preset_values(name: str) -> Dict[str, object]:
-    if name not in PRESETS:
-        raise ValueError(f"preset: expected one of {sorted(PRESETS)}, got {name!r}")
-    return dict(PRESETS[name])
+def march_items(details: Mapping[str, Mapping], current: str = "SEED") -> List[Tuple[str, str, str, int]]:
+    """Enum items (identifier, label, tooltip, number) for the core's marches.
+    Tooltips say what each option means for that march. Without the core, only
+    the stored value is listed, so a file keeps its choice."""
+    items = []
+    for k, (name, d) in enumerate(details.items()):
+        opts = "; ".join(f"{opt.replace('_', ' ')}: {meaning}" for opt, meaning in d["options"].items())
+        extra = " Needs the scene's triangles." if d.get("needs_mesh") else ""
+        extra += "" if d.get("gl", True) else " Runs on the CPU."
+        items.append((name.upper(), name.title(), f"{d['description']}.{extra} {opts}", k))
+    return items or [(current, current.title(), MISSING, 0)]
 
 
-def matching_preset(values: Mapping[str, object]) -> str:
-    """The preset the values equal (floats within 1e-6), or 'CUSTOM'."""
-    for name, preset in PRESETS.items():
-        same = True
-        for key, want in preset.items():
-            got = values.get(key)
-            if isinstance(want, float):
-                same = got is not None and abs(float(got) - want) <= 1e-6
-            else:
-                same = got == want
-            if not same:
-                break
-        if same:
-            return name
-    return "CUSTOM"
+def preset_items(presets: Mapping[str, Mapping], descriptions: Mapping[str, str],
+                 current: str = DEFAULT_PRESET) -> List[Tuple[str, str, str, int]]:
+    """Enum items for the core's presets, then Custom (the raw parameters)."""
+    items = []
+    for k, (name, kw) in enumerate(presets.items()):
+        values = ", ".join(f"{key} {kw[key]}" for key in QUALITY_KEYS)
+        items.append((name.upper(), name.title(), f"{descriptions.get(name, '')} ({values})", k))
+    if not items and current != CUSTOM:
+        items.append((current, current.title(), MISSING, 0))
+    items.append((CUSTOM, "Custom", "The raw parameters below as set", len(items)))
+    return items
 
 
-def trace_kwargs(values: Mapping[str, object]) -> Dict[str, object]:
-    """Keyword arguments for ``glint_core.trace`` from the settings (enum names upper-case)."""
+def preset_values(presets: Mapping[str, Mapping], name: str) -> Dict[str, object]:
+    """The quality parameters of preset ``name`` (enum spelling), march upper-case."""
+    for key, kw in presets.items():
+        if key.upper() == name:
+            return {"march": str(kw["march"]).upper(), "resolution": float(kw["resolution"]),
+                    "steps": int(kw["steps"])}
+    raise ValueError(f"preset: expected one of {[k.upper() for k in presets]}, got {name!r}")
+
+
+def matching_preset(values: Mapping[str, object], presets: Mapping[str, Mapping]) -> str:
+    """The preset the values equal (floats within 1e-6), or CUSTOM."""
+    for key in presets:
+        want = preset_values(presets, key.upper())
+        if all(abs(float(values.get(k, -1)) - v) <= 1e-6 if isinstance(v, float) else values.get(k) == v
+               for k, v in want.items()):
+            return key.upper()
+    return CUSTOM
+
+
+def trace_kwargs(values: Mapping[str, object], presets: Mapping[str, Mapping] = None) -> Dict[str, object]:
+    """Keyword arguments for ``glint_core.trace`` from the settings (enum names upper-case).
+    A named preset takes its quality parameters from the core's table as it is now,
+    so a scene saved with "Balanced" follows what the core measures as balanced."""
+    merged = dict(values)
+    preset = str(values.get("preset", CUSTOM))
+    if presets and preset != CUSTOM and any(k.upper() == preset for k in presets):
+        merged.update(preset_values(presets, preset))
     out = {}
     for key in ("max_distance", "resolution", "thickness"):
-        out[key] = float(values[key])
-    out["steps"] = int(values["steps"])
-    out["march"] = str(values["march"]).lower()
+        out[key] = float(merged[key])
+    out["steps"] = int(merged["steps"])
+    out["march"] = str(merged["march"]).lower()
     for key in ("max_distance", "resolution", "steps", "thickness"):
         default, lo, hi = PARAMETERS[key][:3]
         v = out[key]

@@ -849,6 +849,9 @@ class GlBackend final : public Backend {
 
   GBufferImages rasterize(const RasterInputs& in) override {
     validate(in);
+    if (in.back_layer)
+      throw BackendUnavailable("backend \"gl\": the GL rasterizer does not make the back-face layer; "
+                               "use backend=\"cpu\" (\"auto\" does)");
     GBufferImages out;
     worker_.run([&](GlState& s) { out = s.rasterize(in); });
     return out;
