@@ -35,7 +35,7 @@ const std::vector<MarchInfo>& march_table() {
         {"thickness",
          "how far behind a surface is solid (a ray there is blocked: nothing reported), view "
          "units, where no back_position gives the real depth"}},
-       false, true, &cpu::trace_hiz, nullptr},
+       false, true, &cpu::trace_hiz, "trace_hiz.frag"},
   };
   return table;
 }

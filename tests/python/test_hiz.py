@@ -112,3 +112,19 @@ def test_back_position_is_checked():
     with pytest.raises(ValueError, match="back_position"):
         glint_core.trace(gb["position"], gb["normal"], gb["projection"], march="hiz",
                          back_position=np.zeros((3, 3, 4), np.float32))
+
+
+@pytest.mark.parametrize("back", [False, True])
+@pytest.mark.parametrize("name", list(SCENES))
+def test_gl_matches_cpu(name, back):
+    try:
+        glint_core.backend_name("gl")
+    except glint_core.BackendUnavailable as exc:
+        pytest.skip(f"no GL here: {exc}")
+    gb, _, back_layer = data(name, 160, 120)
+    kw = dict(glint_core.presets()["balanced"], back_position=back_layer if back else None)
+    cpu = glint_core.trace(gb["position"], gb["normal"], gb["projection"], backend="cpu", **kw)
+    gl = glint_core.trace(gb["position"], gb["normal"], gb["projection"], backend="gl", **kw)
+    same = ((cpu[..., 2] > 0) == (gl[..., 2] > 0)) & (np.abs(cpu - gl).max(axis=-1) < 1e-3)
+    print(f"hiz {name} back={back}: CPU/GL {same.mean() * 100:.3f}% agree")
+    assert same.mean() >= 0.99

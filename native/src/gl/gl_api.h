@@ -17,6 +17,7 @@ namespace glint::gl {
   X(PFNGLBINDTEXTUREPROC, BindTexture)                                 \
   X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                             \
   X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                   \
+  X(PFNGLTEXSTORAGE2DPROC, TexStorage2D)                               \
   X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                             \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri)                             \
   X(PFNGLPIXELSTOREIPROC, PixelStorei)                                 \

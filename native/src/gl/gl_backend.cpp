@@ -50,6 +50,10 @@ double rgba32f_bytes(int w, int h) { return static_cast<double>(w) * h * 16.0; }
 
 class GlState {
  public:
+  struct Texture {
+    GLuint id = 0;
+    int w = 0, h = 0;
+  };
   explicit GlState(const std::string& egl_library) : ctx_(egl_library), gl_(ctx_.api()) {
     gl_.GenVertexArrays(1, &empty_vao_);
     gl_.GenFramebuffers(1, &fbo_);
@@ -59,6 +63,7 @@ class GlState {
   ~GlState() {
     for (auto& kv : programs_) gl_.DeleteProgram(kv.second);
     for (Texture& t : textures_) release(t);
+    if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
     release_raster();
     gl_.DeleteFramebuffers(1, &fbo_);
     gl_.DeleteVertexArrays(1, &empty_vao_);
@@ -75,6 +80,10 @@ class GlState {
     const Texture& nrm = upload(kIn1, in.normal, "trace", passes_textures);
     const Texture* spec = in.specular ? &upload(kIn2, *in.specular, "trace", passes_textures) : nullptr;
     const MarchInfo& info = march_info(opt.march);
+    const Texture* back = in.back_position && info.uses_back_position
+                              ? &upload(kAux, *in.back_position, "trace", passes_textures + 1)
+                              : nullptr;
+    if (info.id == March::Hiz) build_pyramid(in, opt, pos, nrm, back);
     const GLuint prog = program(info.gl_program);
     gl_.UseProgram(prog);
     bind(prog, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -98,7 +107,107 @@ class GlState {
     gl_.Uniform1i(loc(prog, "u_steps"), opt.steps);
     const float r = opt.resolution;
     gl_.Uniform1f(loc(prog, "u_resolution"), r < 0.0f ? 0.0f : (r > 1.0f ? 1.0f : r));
+    if (info.id == March::Hiz) {
+      bind_hiz_inputs(prog, in, pos, back);
+      gl_.ActiveTexture(GL_TEXTURE0 + 4);
+      gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
+      gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
+      gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
+    }
     return draw_and_read(w, h, info.name, passes_textures);
+  }
+
+  // The Hi-Z pyramid of march_hiz (native/src/cpu/march_hiz.cpp): level 0
+  // from the G-buffer, then each level from the one below, all on the GPU.
+  // Each reduction reads level L - 1 as the texture's only visible level
+  // while rendering into level L, so no pass samples what it writes.
+  void build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
+                     const Texture& nrm, const Texture* back) {
+    const int w = in.position.width, h = in.position.height;
+    pyramid_target(w, h);
+    const GLuint base = program("hiz_base.frag");
+    gl_.UseProgram(base);
+    bind(base, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
+    bind(base, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+    bind_hiz_inputs(base, in, pos, back);
+    gl_.Uniform2f(loc(base, "u_size"), static_cast<float>(w), static_cast<float>(h));
+    gl_.Uniform1f(loc(base, "u_thickness"), opt.thickness);
+    attach_level(pyramid_.id, 0);
+    draw(w, h);
+    const GLuint reduce = program("hiz_reduce.frag");
+    gl_.UseProgram(reduce);
+    gl_.Uniform1i(loc(reduce, "u_src"), 5);
+    int sw = w, sh = h;
+    for (int level = 1; level < pyramid_.levels; ++level) {
+      const int dw = std::max(1, sw / 2), dh = std::max(1, sh / 2);
+      gl_.ActiveTexture(GL_TEXTURE0 + 5);
+      gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, level - 1);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, level - 1);
+      gl_.Uniform4i(loc(reduce, "u_sizes"), sw, sh, dw, dh);
+      attach_level(pyramid_.id, level);
+      draw(dw, dh);
+      sw = dw;
+      sh = dh;
+    }
+    gl_.ActiveTexture(GL_TEXTURE0 + 5);
+    gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, pyramid_.levels - 1);
+    gl_.BindTexture(GL_TEXTURE_2D, 0);
+    debug_check("hiz pyramid");
+  }
+
+  // The uniforms hiz_common.glsl declares.
+  void bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back) {
+    const Mat4 inv = inverse(in.projection);
+    float f[16];
+    for (int k = 0; k < 16; ++k) f[k] = static_cast<float>(inv.m[k]);
+    gl_.Uniform1fv(loc(prog, "u_inv"), 16, f);
+    // An unused sampler still needs a complete texture: the position stands in.
+    bind(prog, "u_back", 3, back ? *back : pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
+    gl_.Uniform1i(loc(prog, "u_has_back"), back ? 1 : 0);
+  }
+
+  // An RG32F texture with every mip level down to 1x1, kept between frames.
+  void pyramid_target(int w, int h) {
+    if (pyramid_.id && pyramid_.w == w && pyramid_.h == h) return;
+    if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
+    pyramid_ = Pyramid{};
+    int levels = 1;
+    for (int lw = w, lh = h; lw > 1 || lh > 1; ++levels) {
+      lw = std::max(1, lw / 2);
+      lh = std::max(1, lh / 2);
+    }
+    check_size(w, h, "the hiz pyramid", 1);
+    while (gl_.GetError() != GL_NO_ERROR) {
+    }
+    gl_.GenTextures(1, &pyramid_.id);
+    scratch_unit();
+    gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
+    gl_.TexStorage2D(GL_TEXTURE_2D, levels, GL_RG32F, w, h);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    const GLenum err = gl_.GetError();
+    if (err != GL_NO_ERROR) {
+      gl_.DeleteTextures(1, &pyramid_.id);
+      pyramid_ = Pyramid{};
+      if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, "the hiz pyramid", 1);
+      throw Error(std::string("glint GL: allocating the hiz pyramid failed: ") + gl_error_name(err));
+    }
+    pyramid_.w = w;
+    pyramid_.h = h;
+    pyramid_.levels = levels;
+  }
+
+  void attach_level(GLuint tex, int level) {
+    gl_.BindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, level);
+    const GLenum buf = GL_COLOR_ATTACHMENT0;
+    gl_.DrawBuffers(1, &buf);
+    if (gl_.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("glint GL: level " + std::to_string(level) + " of the hiz pyramid cannot be rendered to on " +
+                  info().renderer);
   }
 
   Image reflection_color(const Image& uv, const Image& color) {
@@ -198,10 +307,6 @@ class GlState {
   }
 
  private:
-  struct Texture {
-    GLuint id = 0;
-    int w = 0, h = 0;
-  };
   // Textures are kept between calls and reallocated only when the size
   // changes, so a sequence of frames allocates once. Every pass uses the
   // same few slots, so a large frame's memory is given back as soon as a
@@ -411,6 +516,11 @@ class GlState {
   GLuint empty_vao_ = 0;
   GLuint fbo_ = 0;
   Texture textures_[kSlots];
+  struct Pyramid {
+    GLuint id = 0;
+    int w = 0, h = 0, levels = 0;
+  };
+  Pyramid pyramid_;
   std::map<std::string, GLuint> programs_;
 };
 

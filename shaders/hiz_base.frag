@@ -1,0 +1,44 @@
+#version 430 core
+// Level 0 of the Hi-Z pyramid: each seen texel's nearest view distance over
+// its footprint (its tangent plane at the four corners) and its farthest plus
+// its thickness; (+inf, -inf) where nothing was seen. base_range() in
+// native/src/cpu/march_hiz.cpp, operation for operation.
+#include "common.glsl"
+#include "fragment.glsl"
+#include "trace_common.glsl"
+#include "hiz_common.glsl"
+
+layout(location = 0) out vec2 out_range;
+
+void main() {
+  ivec2 px = pixel_coord();
+  vec4 p = texelFetch(u_position, px, 0);
+  if (!texel_seen(p)) {
+    out_range = vec2(uintBitsToFloat(0x7f800000u), uintBitsToFloat(0xff800000u));
+    return;
+  }
+  float d = -p.z;
+  float t = texel_thickness(px, d);
+  float lo = d;
+  float hi = d;
+  vec4 L;
+  if (texel_plane(texelFetch(u_normal, px, 0).xyz, p.xyz, L)) {
+    precise float spread = FOOTPRINT_SPREAD * abs(d) + t;
+    precise float sxs = 2.0 / u_size.x;
+    precise float sys = 2.0 / u_size.y;
+    for (int corner = 0; corner < 4; ++corner) {
+      precise float sx = float(px.x + (corner & 1)) * sxs - 1.0;
+      precise float sy = float(px.y + (corner >> 1)) * sys - 1.0;
+      float cd = plane_depth(L, sx, sy);
+      if (!finite_f(cd)) continue;
+      precise float dlo = d - spread;
+      precise float dhi = d + spread;
+      cd = cd < dlo ? dlo : cd;
+      cd = dhi < cd ? dhi : cd;
+      lo = cd < lo ? cd : lo;
+      hi = hi < cd ? cd : hi;
+    }
+  }
+  precise float top = hi + t;
+  out_range = vec2(lo, top);
+}

@@ -1,0 +1,193 @@
+#version 430 core
+// The "hiz" march: the Hi-Z pyramid (hiz_base.frag, hiz_reduce.frag) walked
+// cell by cell along the reflected ray's screen-space line. A port of
+// march_hiz() in native/src/cpu/march_hiz.cpp, which explains each step;
+// same operations in the same order. Output: (u, v, 1, 1) at a hit, else 0.
+#include "common.glsl"
+#include "fragment.glsl"
+#include "trace_common.glsl"
+#include "hiz_common.glsl"
+
+uniform sampler2D u_pyramid;  // RG32F, full mip chain: (nearest, farthest + thickness)
+uniform int u_levels;
+
+layout(location = 0) out vec4 out_uv;
+
+// The ray, in the homogeneous form of the CPU's Ray: at screen fraction t
+// the view point is A(t) / B(t).
+vec2 g_f0, g_d, g_inv;
+vec3 g_a0, g_da;
+float g_b0, g_db, g_t_end;
+
+float ray_depth(float t) {
+  precise float r = -(g_a0.z + t * g_da.z) / (g_b0 + t * g_db);
+  return r;
+}
+float ray_b(float t) {
+  precise float r = g_b0 + t * g_db;
+  return r;
+}
+float ray_plane(float t, vec3 u, float np) {
+  precise float r = u.x * (g_a0.x + t * g_da.x) + u.y * (g_a0.y + t * g_da.y) +
+                    u.z * (g_a0.z + t * g_da.z) - np * (g_b0 + t * g_db);
+  return r;
+}
+float ray_exit(ivec4 box) {
+  float te = g_t_end;
+  if (g_d.x != 0.0) {
+    precise float v = (float(g_d.x > 0.0 ? box.z : box.x) - g_f0.x) * g_inv.x;
+    te = v < te ? v : te;
+  }
+  if (g_d.y != 0.0) {
+    precise float v = (float(g_d.y > 0.0 ? box.w : box.y) - g_f0.y) * g_inv.y;
+    te = v < te ? v : te;
+  }
+  return te;
+}
+
+bool make_ray(ivec2 px) {
+  vec3 from, unit_from, normal;
+  if (!read_origin(px, from, unit_from, normal)) return false;
+  vec3 dir = normalize3(reflect3(unit_from, normal));
+  if (!finite_v3(dir)) return false;
+  float len = clipped_length(from, dir, u_max_distance);
+  if (!(len > 0.0)) return false;
+  precise vec3 end = from + dir * len;
+  vec4 c0 = clip_of(from);
+  vec4 c1 = clip_of(end);
+  if (!(c0.w > 0.0) || !(c1.w > 0.0)) return false;
+  vec2 e;
+  if (!to_frag(from, g_f0) || !to_frag(end, e)) return false;
+  precise vec2 d = e - g_f0;
+  g_d = d;
+  if (!finite_f(g_d.x) || !finite_f(g_d.y)) return false;
+  g_inv = vec2(g_d.x != 0.0 ? 1.0 / g_d.x : 0.0, g_d.y != 0.0 ? 1.0 / g_d.y : 0.0);
+  precise float b0 = 1.0 / c0.w;
+  precise float b1 = 1.0 / c1.w;
+  g_b0 = b0;
+  precise float db = b1 - b0;
+  g_db = db;
+  precise vec3 a0 = from * b0;
+  g_a0 = a0;
+  precise vec3 da = end * b1 - a0;
+  g_da = da;
+  g_t_end = 1.0;
+  g_t_end = ray_exit(ivec4(0, 0, int(u_size.x), int(u_size.y)));
+  return g_t_end > 0.0;
+}
+
+ivec2 cell_at(int level, float t, ivec2 size) {
+  float nx = g_d.x > 0.0 ? CELL_NUDGE : (g_d.x < 0.0 ? -CELL_NUDGE : 0.0);
+  float ny = g_d.y > 0.0 ? CELL_NUDGE : (g_d.y < 0.0 ? -CELL_NUDGE : 0.0);
+  precise float px = g_f0.x + t * g_d.x + nx;
+  precise float py = g_f0.y + t * g_d.y + ny;
+  precise float scale = 1.0 / float(1 << level);
+  precise float sx = px * scale;
+  precise float sy = py * scale;
+  int i = !(sx > 0.0) ? 0 : (sx >= float(size.x) ? size.x - 1 : int(sx));
+  int j = !(sy > 0.0) ? 0 : (sy >= float(size.y) ? size.y - 1 : int(sy));
+  return ivec2(i, j);
+}
+
+ivec4 cell_bounds(int level, ivec2 c, ivec2 size) {
+  return ivec4(c.x << level, c.y << level,
+               c.x == size.x - 1 ? int(u_size.x) : (c.x + 1) << level,
+               c.y == size.y - 1 ? int(u_size.y) : (c.y + 1) << level);
+}
+
+const int PASS = 0;
+const int HIT = 1;
+const int BLOCKED = 2;
+
+int texel_hit(ivec2 c, float ta, float tb, out float t_hit) {
+  vec3 n = texelFetch(u_normal, c, 0).xyz;
+  t_hit = ta;
+  if (!normal_usable(n)) return HIT;
+  vec3 p = texelFetch(u_position, c, 0).xyz;
+  precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  precise vec3 u = vec3(n.x * inv, n.y * inv, n.z * inv);
+  precise float np = u.x * p.x + u.y * p.y + u.z * p.z;
+  precise float tol = PLANE_TOLERANCE * sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  float ga = ray_plane(ta, u, np);
+  float gb = ray_plane(tb, u, np);
+  precise float lim_a = -tol * ray_b(ta);
+  precise float lim_b = -tol * ray_b(tb);
+  bool a_behind = ga < lim_a;
+  bool b_behind = gb < lim_b;
+  if (!a_behind && !b_behind) return PASS;
+  if (!a_behind) {
+    precise float f = ga / (ga - gb);
+    f = f < 0.0 ? 0.0 : f;
+    f = 1.0 < f ? 1.0 : f;
+    precise float th = ta + (tb - ta) * f;
+    t_hit = th;
+    return HIT;
+  }
+  vec4 L;
+  if (!texel_plane(n, p, L)) return HIT;
+  float thick = texel_thickness(c, -p.z);
+  precise float sxs = 2.0 / u_size.x;
+  precise float sys = 2.0 / u_size.y;
+  precise float slack = BEHIND_SLACK * abs(p.z);
+  precise float sxa = (g_f0.x + ta * g_d.x) * sxs - 1.0;
+  precise float sya = (g_f0.y + ta * g_d.y) * sys - 1.0;
+  precise float da = ray_depth(ta) - plane_depth(L, sxa, sya);
+  if (da <= slack) return HIT;
+  if (da <= thick) return BLOCKED;
+  if (b_behind) {
+    precise float sxb = (g_f0.x + tb * g_d.x) * sxs - 1.0;
+    precise float syb = (g_f0.y + tb * g_d.y) * sys - 1.0;
+    precise float db = ray_depth(tb) - plane_depth(L, sxb, syb);
+    if (db <= thick) return BLOCKED;
+  }
+  return PASS;
+}
+
+void main() {
+  out_uv = vec4(0.0);
+  ivec2 origin = pixel_coord();
+  if (!make_ray(origin)) return;
+  int top = u_levels - 1;
+  int budget = u_steps * u_levels;
+  float t = ray_exit(ivec4(origin, origin + 1));
+  float zt = ray_depth(t);
+  int level = 0;
+  for (int it = 0; it < budget && t < g_t_end; ++it) {
+    // Level sizes by shift (GL's iterated floor(size / 2) is floor(size / 2^level),
+    // at least 1), not textureSize(): llvmpipe was seen to return a stale
+    // size for a level that changed inside this loop. The loop has no
+    // `continue` for the same reason.
+    ivec2 size = max(ivec2(1), ivec2(u_size) >> level);
+    ivec2 c = cell_at(level, t, size);
+    float te = ray_exit(cell_bounds(level, c, size));
+    if (!(te > t)) te = uintBitsToFloat(floatBitsToUint(t) + 1u);  // always move on (t >= 0)
+    float ze = ray_depth(te);
+    vec2 cell = texelFetch(u_pyramid, c, level).xy;
+    float lo = ze < zt ? ze : zt;
+    float hi = zt < ze ? ze : zt;
+    bool descend = false;
+    if (hi >= cell.x && lo <= cell.y) {
+      if (level > 0) {
+        descend = true;  // something in this cell may meet the ray: look closer
+      } else {
+        float th;
+        int outcome = texel_hit(c, t, te, th);
+        if (outcome == BLOCKED) return;
+        if (outcome == HIT) {
+          precise float u = (g_f0.x + th * g_d.x) / u_size.x;
+          precise float v = (g_f0.y + th * g_d.y) / u_size.y;
+          if (!finite_f(u) || !finite_f(v)) return;
+          out_uv = vec4(u, v, 1.0, 1.0);
+          return;
+        }
+      }
+    }
+    if (descend) {
+      --level;
+    } else {
+      t = te;
+      zt = ze;
+      if (level < top) ++level;  // empty so far: try a bigger stride
+    }
+  }
+}
