@@ -336,9 +336,19 @@ def test_gl_backend_agrees_with_the_cpu_reference():
     assert close.mean() > 0.95  # the rest: a different triangle won a near depth tie at an edge
 
 
-def test_back_layer_is_the_far_side_of_a_closed_box():
+def _gl_or_skip():
+    try:
+        glint_core.backend_name("gl")
+    except glint_core.BackendUnavailable as exc:
+        pytest.skip(f"no GL here: {exc}")
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gl"])
+def test_back_layer_is_the_far_side_of_a_closed_box(backend):
     """back_layer=True: behind every pixel that sees the box, its exit point
     along the pixel's view ray (slab method, computed here); nothing elsewhere."""
+    if backend == "gl":
+        _gl_or_skip()
     w, h = 64, 48
     proj = A.projection_matrix("persp", w, h)
     lo, hi = np.array([-1.0, -1.0, -6.0]), np.array([1.0, 1.0, -4.0])
@@ -352,7 +362,7 @@ def test_back_layer_is_the_far_side_of_a_closed_box():
             tris.append(t if np.cross(b - a, c - a) @ (a - centre) > 0 else (t[0], t[2], t[1]))
     pos = corners[np.array(tris)].astype(np.float32)
     g = glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(tris), np.int32),
-                             np.zeros((1, 4), np.float32), proj, w, h, back_layer=True)
+                             np.zeros((1, 4), np.float32), proj, w, h, back_layer=True, backend=backend)
     seen = g["position"][..., 3] > 0
     back = g["back_position"][..., 3] > 0
     assert seen.sum() > 500 and np.array_equal(seen, back)
@@ -366,4 +376,5 @@ def test_back_layer_is_the_far_side_of_a_closed_box():
     assert err < 1e-4 * 6.0, err
     # Without the flag there is no such layer.
     assert "back_position" not in glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(tris), np.int32),
-                                                       np.zeros((1, 4), np.float32), proj, w, h)
+                                                       np.zeros((1, 4), np.float32), proj, w, h,
+                                                       backend=backend)

@@ -498,6 +498,10 @@ class GlState {
 
   void release_raster() {
     release_raster_targets();
+    if (back_.fbo) gl_.DeleteFramebuffers(1, &back_.fbo);
+    if (back_.depth) gl_.DeleteRenderbuffers(1, &back_.depth);
+    if (back_.color) gl_.DeleteTextures(1, &back_.color);
+    back_ = BackTargets{};
     if (raster_vao_) gl_.DeleteVertexArrays(1, &raster_vao_);
     raster_vao_ = 0;
     for (GLuint& b : buffers_)
@@ -509,6 +513,12 @@ class GlState {
   }
 
   void raster_targets(int w, int h);
+  Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
+  struct BackTargets {
+    GLuint fbo = 0, depth = 0, color = 0;
+    int w = 0, h = 0;
+  };
+  BackTargets back_;
   void buffer_data(int index, GLenum target, size_t bytes, const void* data, const char* what);
 
   EglContext ctx_;
@@ -786,7 +796,65 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   out.position = read(w, h, GL_COLOR_ATTACHMENT0, "rasterize");
   out.normal = read(w, h, GL_COLOR_ATTACHMENT1, "rasterize");
   out.specular = read(w, h, GL_COLOR_ATTACHMENT2, "rasterize");
+  if (in.back_layer) out.back_position = rasterize_back(w, h, tris, base, depth_scale, pf);
   return out;
+}
+
+// The back-face layer: every triangle again into a target of its own, each
+// fragment kept only if it is back-facing and behind the front layer's
+// surface (read from the front pass's position target, still on the GPU).
+Image GlState::rasterize_back(int w, int h, size_t tris, double base, double depth_scale,
+                              const float* proj) {
+  if (!(back_.fbo && back_.w == w && back_.h == h)) {
+    if (back_.fbo) gl_.DeleteFramebuffers(1, &back_.fbo);
+    if (back_.depth) gl_.DeleteRenderbuffers(1, &back_.depth);
+    if (back_.color) gl_.DeleteTextures(1, &back_.color);
+    back_ = BackTargets{};
+    while (gl_.GetError() != GL_NO_ERROR) {
+    }
+    gl_.GenFramebuffers(1, &back_.fbo);
+    gl_.BindFramebuffer(GL_FRAMEBUFFER, back_.fbo);
+    gl_.GenTextures(1, &back_.color);
+    scratch_unit();
+    gl_.BindTexture(GL_TEXTURE_2D, back_.color);
+    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+    gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, back_.color, 0);
+    gl_.GenRenderbuffers(1, &back_.depth);
+    gl_.BindRenderbuffer(GL_RENDERBUFFER, back_.depth);
+    gl_.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
+    gl_.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, back_.depth);
+    const GLenum err = gl_.GetError();
+    if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, "the back-face layer", 2);
+    if (err != GL_NO_ERROR)
+      throw Error(std::string("glint GL: allocating the back-face layer failed: ") + gl_error_name(err));
+    back_.w = w;
+    back_.h = h;
+  }
+  const GLuint prog = program("gbuffer_back.frag", "gbuffer.vert");
+  gl_.UseProgram(prog);
+  gl_.Uniform1fv(loc(prog, "u_proj"), 16, proj);
+  gl_.Uniform1f(loc(prog, "u_depth_base"), static_cast<float>(base));
+  gl_.Uniform1f(loc(prog, "u_depth_scale"), static_cast<float>(depth_scale));
+  gl_.ActiveTexture(GL_TEXTURE0 + 1);
+  gl_.BindTexture(GL_TEXTURE_2D, raster_.color[0]);
+  gl_.Uniform1i(loc(prog, "u_front"), 1);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, back_.fbo);
+  const GLenum buf = GL_COLOR_ATTACHMENT0;
+  gl_.DrawBuffers(1, &buf);
+  gl_.Viewport(0, 0, w, h);
+  const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  const float one = 1.0f;
+  gl_.ClearBufferfv(GL_COLOR, 0, zero);
+  gl_.DepthMask(GL_TRUE);
+  gl_.ClearBufferfv(GL_DEPTH, 0, &one);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthFunc(GL_LESS);
+  gl_.BindVertexArray(raster_vao_);
+  gl_.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(tris * 3));
+  gl_.Disable(GL_DEPTH_TEST);
+  debug_check("rasterize (back-face layer)");
+  return read(w, h, GL_COLOR_ATTACHMENT0, "rasterize (back-face layer)");
 }
 
 // --------------------------------------------------------------------------
@@ -959,9 +1027,6 @@ class GlBackend final : public Backend {
 
   GBufferImages rasterize(const RasterInputs& in) override {
     validate(in);
-    if (in.back_layer)
-      throw BackendUnavailable("backend \"gl\": the GL rasterizer does not make the back-face layer; "
-                               "use backend=\"cpu\" (\"auto\" does)");
     GBufferImages out;
     worker_.run([&](GlState& s) { out = s.rasterize(in); });
     return out;

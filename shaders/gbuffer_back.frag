@@ -1,0 +1,27 @@
+#version 430 core
+// The back-face layer (RasterInputs::back_layer): of the back-facing
+// triangles, the nearest one strictly behind the front layer's surface at
+// each pixel, as the CPU rasterizer's second pass keeps it. Same vertex
+// shader and depth mapping as gbuffer.frag.
+in vec3 v_position;
+
+uniform sampler2D u_front;  // the front pass's position target
+uniform float u_depth_base;
+uniform float u_depth_scale;
+
+// A back face must lie this share of the front's view distance behind it
+// (kBackSeparation in native/src/cpu/raster.cpp).
+const float BACK_SEPARATION = 1e-6;
+
+layout(location = 0) out vec4 out_back;
+
+void main() {
+  if (gl_FrontFacing) discard;
+  vec4 front = texelFetch(u_front, ivec2(gl_FragCoord.xy), 0);
+  if (!(front.w > 0.0)) discard;
+  float d = -v_position.z;
+  float fd = -front.z;
+  if (!(d > fd + BACK_SEPARATION * abs(fd))) discard;
+  out_back = vec4(v_position, 1.0);
+  gl_FragDepth = (d - u_depth_base) * u_depth_scale;
+}
