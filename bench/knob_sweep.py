@@ -43,7 +43,8 @@ SWEEPS = [
     ("steps", [0, 1, 5, 10, 20, 40]),
     ("thickness", [0.05, 0.1, 0.25, 0.5, 1.0, 2.0]),
     ("max_distance", [2.0, 5.0, 10.0, 15.0, 30.0, 1e6]),
-    ("march", ["seed", "linear"]),
+    # Every march the core has that works from the G-buffer alone.
+    ("march", [m for m, d in glint_core.march_details().items() if not d["needs_mesh"]]),
 ]
 
 

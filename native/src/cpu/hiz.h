@@ -38,8 +38,9 @@ HizCamera hiz_camera(const Mat4& projection);
 
 // Per-texel thickness: back_position's view distance minus the front's where
 // a back surface is known and behind, else `thickness`.
-HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
-                             const HizCamera& cam, float thickness, int threads);
+// Fills `out`, reusing its memory.
+void build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                       const HizCamera& cam, float thickness, int threads, HizPyramid& out);
 
 // Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).
 inline void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {
