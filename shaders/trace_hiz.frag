@@ -23,6 +23,11 @@ float ray_depth(float t) {
   precise float r = -(g_a0.z + t * g_da.z) / (g_b0 + t * g_db);
   return r;
 }
+// ray_depth(t) = ray_num(t) / ray_b(t), ray_b > 0: the walk compares without dividing.
+float ray_num(float t) {
+  precise float r = -(g_a0.z + t * g_da.z);
+  return r;
+}
 float ray_b(float t) {
   precise float r = g_b0 + t * g_db;
   return r;
@@ -150,7 +155,8 @@ void main() {
   int top = u_levels - 1;
   int budget = u_steps * u_levels;
   float t = ray_exit(ivec4(origin, origin + 1));
-  float zt = ray_depth(t);
+  float nt = ray_num(t);
+  float bt = ray_b(t);
   int level = 0;
   for (int it = 0; it < budget && t < g_t_end; ++it) {
     // Level sizes by shift (GL's iterated floor(size / 2) is floor(size / 2^level),
@@ -161,12 +167,15 @@ void main() {
     ivec2 c = cell_at(level, t, size);
     float te = ray_exit(cell_bounds(level, c, size));
     if (!(te > t)) te = uintBitsToFloat(floatBitsToUint(t) + 1u);  // always move on (t >= 0)
-    float ze = ray_depth(te);
+    float ne = ray_num(te);
+    float be = ray_b(te);
     vec2 cell = texelFetch(u_pyramid, c, level).xy;
-    float lo = ze < zt ? ze : zt;
-    float hi = zt < ze ? ze : zt;
+    precise float lt = cell.x * bt;
+    precise float le = cell.x * be;
+    precise float ht = cell.y * bt;
+    precise float he = cell.y * be;
     bool descend = false;
-    if (hi >= cell.x && lo <= cell.y) {
+    if ((nt >= lt || ne >= le) && (nt <= ht || ne <= he)) {
       if (level > 0) {
         descend = true;  // something in this cell may meet the ray: look closer
       } else {
@@ -186,7 +195,8 @@ void main() {
       --level;
     } else {
       t = te;
-      zt = ze;
+      nt = ne;
+      bt = be;
       if (level < top) ++level;  // empty so far: try a bigger stride
     }
   }

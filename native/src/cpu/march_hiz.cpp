@@ -126,6 +126,9 @@ struct Ray {
   float t_end;        // where the line leaves the image, or 1
 
   float depth(float t) const { return -(a0[2] + t * da[2]) / (b0 + t * db); }
+  // depth(t) = num(t) / b(t) with b > 0: the walk compares num with
+  // range * b and never divides.
+  float num(float t) const { return -(a0[2] + t * da[2]); }
   float b(float t) const { return b0 + t * db; }
   // n . (view point - P), times B(t) > 0: the plane test without a division.
   float plane(float t, const float n[3], float np) const {
@@ -253,7 +256,7 @@ void march_hiz(const MarchSetup& s, const HizPyramid& pyr, const HizCamera& cam,
   // Leave the origin's own texel first: the ray starts on its surface.
   int box[4] = {x, y, x + 1, y + 1};
   float t = r.exit(box);
-  float zt = r.depth(t);
+  float nt = r.num(t), bt = r.b(t);
   int level = 0;
   for (long it = 0; it < budget && t < r.t_end; ++it) {
     int i, j;
@@ -261,10 +264,10 @@ void march_hiz(const MarchSetup& s, const HizPyramid& pyr, const HizCamera& cam,
     cell_bounds(pyr, level, i, j, box);
     float te = r.exit(box);
     if (!(te > t)) te = std::nextafter(t, kInf);  // always move on
-    const float ze = r.depth(te);
+    const float ne = r.num(te), be = r.b(te);
     const float* c = pyr.cell(level, i, j);
-    const float lo = std::min(zt, ze), hi = std::max(zt, ze);
-    if (hi >= c[0] && lo <= c[1]) {
+    // The depth span [min, max] of the two ends meets [c0, c1].
+    if ((nt >= c[0] * bt || ne >= c[0] * be) && (nt <= c[1] * bt || ne <= c[1] * be)) {
       if (level > 0) {
         --level;  // something in this cell may meet the ray: look closer
         continue;
@@ -283,7 +286,8 @@ void march_hiz(const MarchSetup& s, const HizPyramid& pyr, const HizCamera& cam,
       }
     }
     t = te;
-    zt = ze;
+    nt = ne;
+    bt = be;
     if (level < top) ++level;  // empty so far: try a bigger stride
   }
 }
