@@ -10,7 +10,7 @@ uniform bool u_has_specular;   // TraceInputs::specular was given: skip non-refl
 uniform float u_proj[16];   // projection, row-major, rows as printed
 uniform double u_projd[16]; // the same in double, for the near-plane clipping
 uniform int u_kind;         // 0 perspective, 1 orthographic, 2 general (glint::ProjectionKind)
-uniform int u_eye_kind;     // 0 origin, 1 point, 2 direction (cpu::MarchSetup::Eye)
+uniform int u_eye_kind;     // 0 origin, 1 point, 2 direction (glint::EyeKind)
 uniform vec3 u_eye;         // the eye point, or the unit direction of parallel view rays
 uniform vec2 u_size;        // float(width), float(height)
 

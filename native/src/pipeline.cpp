@@ -5,8 +5,7 @@
 #include <chrono>
 #include <mutex>
 
-#include "cpu/march.h"
-#include "cpu/parallel.h"
+#include "parallel.h"
 #include "glint/errors.h"
 
 namespace glint {
@@ -30,12 +29,12 @@ SceneNeeds survey(const PipelineInputs& in, int threads) {
   SceneNeeds needs;
   std::mutex mu;
   int bx0 = in.specular.width, by0 = in.specular.height, bx1 = 0, by1 = 0;
-  cpu::parallel_rows(0, in.specular.height, threads, [&](int y) {
+  parallel_rows(0, in.specular.height, threads, [&](int y) {
     size_t refl = 0, rough = 0;
     int rx0 = in.specular.width, rx1 = -1;
     for (int x = 0; x < in.specular.width; ++x) {
       const float* s = in.specular.px(x, y);
-      if (!is_reflective(s) || !cpu::texel_seen(in.position.px(x, y))) continue;
+      if (!is_reflective(s) || !texel_seen(in.position.px(x, y))) continue;
       ++refl;
       if (roughness_of(s) > 0.0f) {
         ++rough;

@@ -61,6 +61,44 @@ Mat4 inverse(const Mat4& a) {
   return inv;
 }
 
+CameraEye camera_eye(const Mat4& P) {
+  CameraEye out;
+  EyeKind& kind = out.kind;
+  float* eye = out.eye;
+  // Null vector of the 3x4 matrix of rows 0, 1, 3, by cofactors.
+  const int rows[3] = {0, 1, 3};
+  double e[4];
+  for (int c = 0; c < 4; ++c) {
+    int cols[3], k = 0;
+    for (int j = 0; j < 4; ++j)
+      if (j != c) cols[k++] = j;
+    auto m = [&](int r, int cc) { return P(rows[r], cols[cc]); };
+    const double minor = m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) -
+                         m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0)) +
+                         m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
+    e[c] = (c % 2 ? -1.0 : 1.0) * minor;
+  }
+  const double len = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3]);
+  if (classify_projection(P) == ProjectionKind::Perspective || len == 0.0) {
+    kind = EyeKind::Origin;
+    eye[0] = eye[1] = eye[2] = 0.0f;
+    return out;
+  }
+  if (std::fabs(e[3]) > 1e-12 * len) {
+    kind = EyeKind::Point;
+    for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(e[i] / e[3]);
+    return out;
+  }
+  // An eye at infinity: the rays run along e. Point them into the scene, the
+  // way normalized device depth grows (OpenGL: near -1, far +1).
+  const double dz = P(2, 0) * e[0] + P(2, 1) * e[1] + P(2, 2) * e[2];
+  const double sign = dz >= 0.0 ? 1.0 : -1.0;
+  const double dl = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  kind = EyeKind::Direction;
+  for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(sign * e[i] / dl);
+  return out;
+}
+
 ProjectionKind classify_projection(const Mat4& p) {
   if (p(3, 0) == 0.0 && p(3, 1) == 0.0 && p(3, 2) == -1.0 && p(3, 3) == 0.0)
     return ProjectionKind::Perspective;

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "analytic_scene.h"
-#include "cpu/parallel.h"
+#include "parallel.h"
 #include "glint/pipeline.h"
 
 using namespace glint;
@@ -173,7 +173,7 @@ TEST(Pipeline, NonFiniteShininessIsSmoothWhenDecidingOnTheBlur) {
 TEST(ParallelRows, AnExceptionInABodyReachesTheCaller) {
   for (int threads : {1, 4}) {
     std::atomic<int> done{0};
-    EXPECT_THROW(cpu::parallel_rows(0, 200, threads,
+    EXPECT_THROW(parallel_rows(0, 200, threads,
                                     [&](int y) {
                                       if (y == 37) throw std::runtime_error("row 37");
                                       ++done;
@@ -203,7 +203,7 @@ TEST(ParallelRows, EveryRowRunsOnceWhenThreadsCannotBeStarted) {
     const rlim_t limit = static_cast<rlim_t>(vm_kib + 2048) * 1024;  // 2 MiB to spare
     const rlimit r{limit, limit};
     if (setrlimit(RLIMIT_AS, &r) != 0) _exit(4);
-    cpu::parallel_rows(0, 5000, 64, [&](int y) { ++hits[y]; });
+    parallel_rows(0, 5000, 64, [&](int y) { ++hits[y]; });
     for (int v : hits)
       if (v != 1) _exit(2);
     _exit(0);

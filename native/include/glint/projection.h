@@ -22,6 +22,18 @@ enum class ProjectionKind {
 // Throws InvalidArgument("projection", ...) for a non-finite or singular matrix.
 void validate_projection(const Mat4& p);
 ProjectionKind classify_projection(const Mat4& p);
+// Where the camera looks from, for the incident direction of each pixel:
+// the homogeneous point e with rows 0, 1 and 3 of P e = 0 (it projects to no
+// pixel). Origin: a perspective camera at the view-space origin, whose rays
+// are normalize(position) as in the seed. Point: normalize(position - eye).
+// Direction: parallel rays along `eye` (orthographic), pointing into the scene.
+enum class EyeKind { Origin, Point, Direction };
+struct CameraEye {
+  EyeKind kind = EyeKind::Origin;
+  float eye[3] = {0.0f, 0.0f, 0.0f};
+};
+CameraEye camera_eye(const Mat4& projection);
+
 // The inverse of a matrix validate_projection() accepts.
 Mat4 inverse(const Mat4& p);
 

@@ -30,6 +30,12 @@ inline float roughness_of(const float* spec) {
   const float s = spec[3] - spec[3] == 0.0f ? spec[3] : 1.0f;
   return 1.0f - (s < 0.0f ? 0.0f : (s > 1.0f ? 1.0f : s));
 }
+// True when a position texel counts as "seen": w > 0 and every channel finite.
+inline bool texel_seen(const float* p) {
+  return p[3] > 0.0f && p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f &&
+         p[3] - p[3] == 0.0f;
+}
+
 // A pixel is reflective when its specular amount is positive (and finite).
 bool is_reflective(const float* spec);
 

@@ -118,7 +118,7 @@ class CpuBackend final : public Backend {
     require_image(uv, "uv");
     require_image(color, "color");
     Image out(uv.width, uv.height);
-    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+    parallel_rows(0, out.height, threads_, [&](int y) {
       for (int x = 0; x < out.width; ++x) {
         const float* t = uv.px(x, y);
         const float alpha = clamp01(t[2]);
@@ -157,7 +157,7 @@ class CpuBackend final : public Backend {
     const int w = x1 - x0;
     const ptrdiff_t hstride = static_cast<ptrdiff_t>(w) * 4;
     std::vector<float> horiz(static_cast<size_t>(hy1 - hy0) * w * 4);
-    cpu::parallel_rows(hy0, hy1, threads_, [&](int y) {
+    parallel_rows(hy0, hy1, threads_, [&](int y) {
       float* dst = horiz.data() + static_cast<size_t>(y - hy0) * hstride;
       box_sums_1d(src.px(0, y), 4, src.width, size, sep, x0, x1,
                   [&](int x, const float* sum) { std::copy(sum, sum + 4, dst + (x - x0) * 4); });
@@ -169,7 +169,7 @@ class CpuBackend final : public Backend {
     constexpr int kBlock = 64;
     const int blocks = (w + kBlock - 1) / kBlock;
     const bool sliding = sep == std::floor(sep);
-    cpu::parallel_rows(0, blocks, threads_, [&](int b) {
+    parallel_rows(0, blocks, threads_, [&](int b) {
       const int bx0 = x0 + b * kBlock, bx1 = std::min(x1, bx0 + kBlock);
       // Row r of the horizontal sums (absolute row, clamped to the image;
       // `reach` keeps every tap inside [hy0, hy1)).
@@ -215,7 +215,7 @@ class CpuBackend final : public Backend {
     require_same_size(color, "reflection_color", blurred, "reflection_blur");
     require_same_size(color, "reflection_color", specular, "specular");
     Image out(color.width, color.height);
-    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+    parallel_rows(0, out.height, threads_, [&](int y) {
       for (int x = 0; x < out.width; ++x) {
         const float* s = specular.px(x, y);
         if (!is_reflective(s)) continue;
@@ -234,7 +234,7 @@ class CpuBackend final : public Backend {
     require_image(base, "color");
     require_same_size(base, "color", reflection, "reflection");
     Image out(base.width, base.height);
-    cpu::parallel_rows(0, out.height, threads_, [&](int y) {
+    parallel_rows(0, out.height, threads_, [&](int y) {
       for (int x = 0; x < out.width; ++x) {
         const float* b = base.px(x, y);
         const float* r = reflection.px(x, y);

@@ -80,40 +80,6 @@ void onscreen_range(double sx, double sy, double ix, double iy, int64_t n, doubl
 
 }  // namespace
 
-void camera_eye(const Mat4& P, MarchSetup::Eye& kind, float eye[3]) {
-  // Null vector of the 3x4 matrix of rows 0, 1, 3, by cofactors.
-  const int rows[3] = {0, 1, 3};
-  double e[4];
-  for (int c = 0; c < 4; ++c) {
-    int cols[3], k = 0;
-    for (int j = 0; j < 4; ++j)
-      if (j != c) cols[k++] = j;
-    auto m = [&](int r, int cc) { return P(rows[r], cols[cc]); };
-    const double minor = m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) -
-                         m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0)) +
-                         m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
-    e[c] = (c % 2 ? -1.0 : 1.0) * minor;
-  }
-  const double len = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3]);
-  if (classify_projection(P) == ProjectionKind::Perspective || len == 0.0) {
-    kind = MarchSetup::Eye::Origin;
-    eye[0] = eye[1] = eye[2] = 0.0f;
-    return;
-  }
-  if (std::fabs(e[3]) > 1e-12 * len) {
-    kind = MarchSetup::Eye::Point;
-    for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(e[i] / e[3]);
-    return;
-  }
-  // An eye at infinity: the rays run along e. Point them into the scene, the
-  // way normalized device depth grows (OpenGL: near -1, far +1).
-  const double dz = P(2, 0) * e[0] + P(2, 1) * e[1] + P(2, 2) * e[2];
-  const double sign = dz >= 0.0 ? 1.0 : -1.0;
-  const double dl = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-  kind = MarchSetup::Eye::Direction;
-  for (int i = 0; i < 3; ++i) eye[i] = static_cast<float>(sign * e[i] / dl);
-}
-
 void fill_view_distance(const Image& position, int y, float* out) {
   for (int x = 0; x < position.width; ++x) {
     const float* p = position.px(x, y);
@@ -133,7 +99,9 @@ MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& pr
   }
   s.kind = classify_projection(projection);
   s.opt = opt;
-  camera_eye(projection, s.eye_kind, s.eye);
+  const CameraEye ce = camera_eye(projection);
+  s.eye_kind = ce.kind;
+  for (int k = 0; k < 3; ++k) s.eye[k] = ce.eye[k];
   return s;
 }
 

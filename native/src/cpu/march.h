@@ -6,6 +6,7 @@
 #include "glint/image.h"
 #include "glint/options.h"
 #include "glint/projection.h"
+#include "glint/stages.h"
 
 namespace glint::cpu {
 
@@ -24,13 +25,11 @@ struct MarchSetup {
   // Where the camera looks from, for the incident direction of each pixel.
   // Origin: the seed's normalize(position). Point: normalize(position - eye).
   // Direction: an orthographic camera's rays are all parallel to `eye`.
-  enum class Eye { Origin, Point, Direction } eye_kind = Eye::Origin;
+  using Eye = EyeKind;
+  Eye eye_kind = Eye::Origin;
   float eye[3] = {0.0f, 0.0f, 0.0f};
 };
 
-// The camera centre of a projection: the homogeneous point e with rows 0, 1
-// and 3 of P e = 0 (it projects to no pixel). Exposed for the GL backend.
-void camera_eye(const Mat4& projection, MarchSetup::Eye& kind, float eye[3]);
 
 // `view_distance` must hold position.width * position.height floats filled by
 // fill_view_distance, and outlive the setup.
@@ -46,10 +45,5 @@ std::vector<float> view_distances(const Image& position, int threads);
 void march_seed(const MarchSetup& s, int x, int y, float out[4]);
 void march_linear(const MarchSetup& s, int x, int y, float out[4]);
 
-// True when a position texel counts as "seen": w > 0 and every channel finite.
-inline bool texel_seen(const float* p) {
-  return p[3] > 0.0f && p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f &&
-         p[3] - p[3] == 0.0f;
-}
 
 }  // namespace glint::cpu

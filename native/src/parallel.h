@@ -1,4 +1,4 @@
-// Row-parallel loops for the CPU backend. Rays cost very different amounts
+// Row-parallel loops, for the CPU backend and the pipeline's survey. Rays cost very different amounts
 // (a sky pixel is free, a grazing floor ray crosses the screen), so rows are
 // handed out in small chunks from a shared counter rather than split evenly.
 #pragma once
@@ -10,7 +10,7 @@
 #include <thread>
 #include <vector>
 
-namespace glint::cpu {
+namespace glint {
 
 inline int resolve_threads(int requested) {
   if (requested > 0) return requested;
@@ -64,4 +64,4 @@ void parallel_rows(int begin, int end, int threads, Body&& body) {
   if (failure) std::rethrow_exception(failure);
 }
 
-}  // namespace glint::cpu
+}  // namespace glint

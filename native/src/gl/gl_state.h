@@ -1,0 +1,161 @@
+// GlState: the GL backend's state on its worker thread, the context and
+// every GL object, and the operations on them. Its methods live by concern:
+// resources.cpp (textures, targets, uploads, read-backs, programs), passes.cpp
+// (the full-screen stages, the Hi-Z pyramid), gl_rasterizer.cpp (the G-buffer
+// and back-face passes). Only worker.cpp's thread ever calls them.
+#pragma once
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "gl/egl_context.h"
+#include "gl/program.h"
+#include "glint/image.h"
+#include "glint/options.h"
+#include "glint/raster.h"
+#include "glint/stages.h"
+
+namespace glint::gl {
+
+inline std::string mib(double bytes) {
+  char buf[32];
+  const double m = bytes / (1024.0 * 1024.0);
+  std::snprintf(buf, sizeof buf, m < 10.0 ? "%.1f" : "%.0f", m);
+  return buf;
+}
+
+inline std::string size_text(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+inline double rgba32f_bytes(int w, int h) { return static_cast<double>(w) * h * 16.0; }
+
+
+class GlState {
+ public:
+  struct Texture {
+    GLuint id = 0;
+    int w = 0, h = 0;
+  };
+  explicit GlState(const std::string& egl_library);
+
+  ~GlState();
+
+  const ContextInfo& info() const { return ctx_.info(); }
+  const Api& api() const { return gl_; }
+
+  Image trace(const TraceInputs& in, const TraceOptions& opt);
+
+  // The Hi-Z pyramid of march_hiz (native/src/cpu/march_hiz.cpp): level 0
+  // from the G-buffer, then each level from the one below, all on the GPU.
+  // Each reduction reads level L - 1 as the texture's only visible level
+  // while rendering into level L, so no pass samples what it writes.
+  void build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
+                     const Texture& nrm, const Texture* back);
+
+  // The uniforms hiz_common.glsl declares.
+  void bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back);
+
+  // An RG32F texture with every mip level down to 1x1, kept between frames.
+  void pyramid_target(int w, int h);
+
+  void attach_level(GLuint tex, int level);
+
+  Image reflection_color(const Image& uv, const Image& color);
+
+  Image box_blur(const Image& src, const BlurOptions& opt, const int* region);
+
+  Image reflection(const Image& color, const Image& blurred, const Image& specular);
+
+  Image combine(const Image& base, const Image& refl, Combine mode);
+
+  GBufferImages rasterize(const RasterInputs& in);
+
+  void compile_for_test(const std::string& entry);
+
+ private:
+  // Textures are kept between calls and reallocated only when the size
+  // changes, so a sequence of frames allocates once. Every pass uses the
+  // same few slots, so a large frame's memory is given back as soon as a
+  // smaller one runs.
+  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kSlots };
+
+  void release(Texture& t);
+
+  // Drains the GL error queue; throws on the first error with `what`.
+  void check(const std::string& what);
+
+  // After every pass in debug builds; release builds skip the round trip.
+  void debug_check(const std::string& what);
+
+  // The texture limits, before any allocation: an 8K frame on a GL whose
+  // limit is 4K fails here, with the numbers, instead of inside the driver.
+  void check_size(int w, int h, const char* pass, int textures);
+
+  [[noreturn]] void out_of_memory(int w, int h, const char* pass, int textures);
+
+  // A w x h RGBA32F texture in `slot`, allocated if its size changed.
+  // Allocation errors are checked in every build: running out of memory is
+  // an expected outcome for large frames, not a bug.
+  Texture& target(Slot slot, int w, int h, const char* pass, int textures);
+
+  Texture& upload(Slot slot, const Image& img, const char* pass, int textures);
+
+  // Binding a texture to work on it replaces what the active unit held, and
+  // the passes' inputs sit on units 0..3: uploads and allocations use a unit
+  // no pass samples from.
+  void scratch_unit() { gl_.ActiveTexture(GL_TEXTURE0 + 15); }
+
+  GLint loc(GLuint prog, const char* name) { return gl_.GetUniformLocation(prog, name); }
+
+  void bind(GLuint prog, const char* sampler, int unit, const Texture& t, GLint filter, GLint wrap);
+
+  // `vert` + `frag`, compiled on first use and kept (every fragment shader
+  // is used with one vertex shader only).
+  GLuint program(const std::string& frag, const char* vert = "fullscreen.vert");
+
+  void attach(const Texture& t);
+
+  void draw(int w, int h);
+
+  // Reads the colour attachment `attachment` of the bound framebuffer.
+  Image read(int w, int h, GLenum attachment, const char* pass);
+
+  Image draw_and_read(int w, int h, const char* pass, int textures);
+
+  // --- rasterizer objects, kept between frames like the textures -----------
+  struct RasterTargets {
+    GLuint fbo = 0, depth = 0, color[3] = {0, 0, 0};
+    int w = 0, h = 0;
+  };
+  RasterTargets raster_;
+  GLuint raster_vao_ = 0;
+  GLuint buffers_[6] = {0, 0, 0, 0, 0, 0};  // positions, normals, uvs, tangents, triangle material, material table
+  std::vector<GLuint> normal_map_textures_;
+
+  void release_raster_targets();
+
+  void release_raster();
+
+  void raster_targets(int w, int h);
+  Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
+  struct BackTargets {
+    GLuint fbo = 0, depth = 0, color = 0;
+    int w = 0, h = 0;
+  };
+  BackTargets back_;
+  void buffer_data(int index, GLenum target, size_t bytes, const void* data, const char* what);
+
+  EglContext ctx_;
+  const Api& gl_;
+  GLuint empty_vao_ = 0;
+  GLuint fbo_ = 0;
+  Texture textures_[kSlots];
+  struct Pyramid {
+    GLuint id = 0;
+    int w = 0, h = 0, levels = 0;
+  };
+  Pyramid pyramid_;
+  std::map<std::string, GLuint> programs_;
+};
+
+}  // namespace glint::gl
