@@ -77,7 +77,12 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cache", default=os.path.join(HERE, "..", "build", "bench-cache"),
                     help="where exact G-buffers are kept between runs ('' for none)")
+    ap.add_argument("--cost", action="store_true",
+                    help="instead: time of the seed and the balanced preset against max_distance "
+                         "and image size on the floor scene")
     args = ap.parse_args()
+    if args.cost:
+        return cost_table(args)
     runs = [("seed (defaults)", dict(march="seed"), False)]
     for name, kw in glint_core.presets().items():
         if kw["march"] in glint_core.marches() and not glint_core.march_details()[kw["march"]]["needs_mesh"]:
@@ -100,6 +105,26 @@ def main():
                     p, r = score(uv, d["exact_uv"], d["visible"])
                     print(f"| {scene} | {w}x{h} | {backend} | {label} | {ms:.0f} | {ms / seed_ms:.2f} | "
                           f"{p:.4f} | {r:.4f} |", flush=True)
+
+
+def cost_table(args):
+    """How the cost grows: the seed's samples grow with the pixels a ray crosses, the
+    Hi-Z walk's cells with the logarithm of that."""
+    balanced = glint_core.presets()["balanced"]
+    sizes = args.sizes.split(",")
+    print("| size | max_distance | seed ms | balanced ms | balanced / seed |")
+    print("|---|---|---|---|---|")
+    for size in sizes:
+        w, h = (int(v) for v in size.split("x"))
+        d = scene_data("floor", w, h, args.cache)
+        for md in (2.0, 5.0, 15.0, 100.0, 1e6):
+            t = []
+            for kw in (dict(march="seed"), balanced):
+                kw = dict(kw, max_distance=md)
+                ms, _ = timed(lambda: glint_core.trace(d["position"], d["normal"], d["projection"], **kw),
+                              args.repeat)
+                t.append(ms)
+            print(f"| {w}x{h} | {md:g} | {t[0]:.0f} | {t[1]:.0f} | {t[1] / t[0]:.2f} |", flush=True)
 
 
 if __name__ == "__main__":
