@@ -26,10 +26,21 @@ void main() {
     precise float spread = FOOTPRINT_SPREAD * abs(d) + t;
     precise float sxs = 2.0 / u_size.x;
     precise float sys = 2.0 / u_size.y;
+    // On the plane, the view point's z and w are affine in (sx, sy).
+    precise float k = 1.0 / L.z;
+    precise float al = -L.x * k;
+    precise float be = -L.y * k;
+    precise float ga = -L.w * k;
+    precise float nx = u_inv[8] + u_inv[10] * al;
+    precise float ny = u_inv[9] + u_inv[10] * be;
+    precise float nc = u_inv[11] + u_inv[10] * ga;
+    precise float dx = u_inv[12] + u_inv[14] * al;
+    precise float dy = u_inv[13] + u_inv[14] * be;
+    precise float dc = u_inv[15] + u_inv[14] * ga;
     for (int corner = 0; corner < 4; ++corner) {
       precise float sx = float(px.x + (corner & 1)) * sxs - 1.0;
       precise float sy = float(px.y + (corner >> 1)) * sys - 1.0;
-      float cd = plane_depth(L, sx, sy);
+      precise float cd = -((nx * sx + ny * sy + nc) / (dx * sx + dy * sy + dc));
       if (!finite_f(cd)) continue;
       precise float dlo = d - spread;
       precise float dhi = d + spread;

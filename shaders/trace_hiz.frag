@@ -61,14 +61,17 @@ bool make_ray(ivec2 px) {
   vec4 c0 = clip_of(from);
   vec4 c1 = clip_of(end);
   if (!(c0.w > 0.0) || !(c1.w > 0.0)) return false;
-  vec2 e;
-  if (!to_frag(from, g_f0) || !to_frag(end, e)) return false;
-  precise vec2 d = e - g_f0;
-  g_d = d;
-  if (!finite_f(g_d.x) || !finite_f(g_d.y)) return false;
-  g_inv = vec2(g_d.x != 0.0 ? 1.0 / g_d.x : 0.0, g_d.y != 0.0 ? 1.0 / g_d.y : 0.0);
+  // One reciprocal of w per end serves the projection and A, B alike.
   precise float b0 = 1.0 / c0.w;
   precise float b1 = 1.0 / c1.w;
+  precise float f0x = (c0.x * b0 * 0.5 + 0.5) * u_size.x;
+  precise float f0y = (c0.y * b0 * 0.5 + 0.5) * u_size.y;
+  precise float dx = (c1.x * b1 * 0.5 + 0.5) * u_size.x - f0x;
+  precise float dy = (c1.y * b1 * 0.5 + 0.5) * u_size.y - f0y;
+  g_f0 = vec2(f0x, f0y);
+  g_d = vec2(dx, dy);
+  if (!finite_f(f0x) || !finite_f(f0y) || !finite_f(dx) || !finite_f(dy)) return false;
+  g_inv = vec2(g_d.x != 0.0 ? 1.0 / g_d.x : 0.0, g_d.y != 0.0 ? 1.0 / g_d.y : 0.0);
   g_b0 = b0;
   precise float db = b1 - b0;
   g_db = db;

@@ -101,10 +101,17 @@ void base_range(const Image& position, const Image& normal, const Image* back, c
   if (texel_plane(position, normal, cam, x, y, L)) {
     const float spread = kFootprintSpread * std::fabs(d) + t;
     const float w = static_cast<float>(position.width), h = static_cast<float>(position.height);
+    // On the plane, sz and so the view point's z and w are affine in (sx, sy):
+    // one reciprocal here, one division per corner.
+    const float* H = cam.inv;
+    const float k = 1.0f / L[2];
+    const float al = -L[0] * k, be = -L[1] * k, ga = -L[3] * k;
+    const float nx = H[8] + H[10] * al, ny = H[9] + H[10] * be, nc = H[11] + H[10] * ga;
+    const float dx = H[12] + H[14] * al, dy = H[13] + H[14] * be, dc = H[15] + H[14] * ga;
     for (int corner = 0; corner < 4; ++corner) {
       const float sx = static_cast<float>(x + (corner & 1)) * (2.0f / w) - 1.0f;
       const float sy = static_cast<float>(y + (corner >> 1)) * (2.0f / h) - 1.0f;
-      float cd = plane_depth(cam.inv, L, sx, sy);
+      float cd = -((nx * sx + ny * sy + nc) / (dx * sx + dy * sy + dc));
       if (!finite(cd)) continue;
       cd = std::min(std::max(cd, d - spread), d + spread);
       lo = std::min(lo, cd);
@@ -162,19 +169,21 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
   clip_of(s.proj, from, c0);
   clip_of(s.proj, end, c1);
   if (!(c0[3] > 0.0f) || !(c1[3] > 0.0f)) return false;
-  float e[2];
-  if (!to_frag(s.proj, from, w, h, r.f0) || !to_frag(s.proj, end, w, h, e)) return false;
-  r.d[0] = e[0] - r.f0[0];
-  r.d[1] = e[1] - r.f0[1];
-  if (!finite(r.d[0]) || !finite(r.d[1])) return false;
+  // One reciprocal of w per end serves the projection and A, B alike.
+  const float b0 = 1.0f / c0[3], b1 = 1.0f / c1[3];
+  r.f0[0] = (c0[0] * b0 * 0.5f + 0.5f) * w;
+  r.f0[1] = (c0[1] * b0 * 0.5f + 0.5f) * h;
+  r.d[0] = (c1[0] * b1 * 0.5f + 0.5f) * w - r.f0[0];
+  r.d[1] = (c1[1] * b1 * 0.5f + 0.5f) * h - r.f0[1];
+  if (!finite(r.f0[0]) || !finite(r.f0[1]) || !finite(r.d[0]) || !finite(r.d[1])) return false;
   r.inv[0] = r.d[0] != 0.0f ? 1.0f / r.d[0] : 0.0f;
   r.inv[1] = r.d[1] != 0.0f ? 1.0f / r.d[1] : 0.0f;
-  r.b0 = 1.0f / c0[3];
-  r.db = 1.0f / c1[3] - r.b0;
+  r.b0 = b0;
+  r.db = b1 - b0;
   const float fa[3] = {from.x, from.y, from.z}, ea[3] = {end.x, end.y, end.z};
   for (int k = 0; k < 3; ++k) {
-    r.a0[k] = fa[k] * r.b0;
-    r.da[k] = ea[k] * (1.0f / c1[3]) - r.a0[k];
+    r.a0[k] = fa[k] * b0;
+    r.da[k] = ea[k] * b1 - r.a0[k];
   }
   const int image[4] = {0, 0, s.position->width, s.position->height};
   r.t_end = 1.0f;
