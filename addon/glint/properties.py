@@ -59,24 +59,21 @@ def _number_of(items, identifier):
     return 0
 
 
-def _get_march(self):
-    return _number_of(_march_items(self, None), self.march_name)
+def _stored_by_name(items_fn, attr):
+    """get/set for an enum whose choice is kept by name in the string property
+    ``attr`` (its number is only the position in the items of the moment)."""
+    def get(self):
+        return _number_of(items_fn(self, None), getattr(self, attr))
+
+    def set_(self, number):
+        for item in items_fn(self, None):
+            if item[3] == number:
+                setattr(self, attr, item[0])
+    return get, set_
 
 
-def _set_march(self, number):
-    for item in _march_items(self, None):
-        if item[3] == number:
-            self.march_name = item[0]
-
-
-def _get_preset(self):
-    return _number_of(_preset_items(self, None), self.preset_name)
-
-
-def _set_preset(self, number):
-    for item in _preset_items(self, None):
-        if item[3] == number:
-            self.preset_name = item[0]
+_get_march, _set_march = _stored_by_name(_march_items, "march_name")
+_get_preset, _set_preset = _stored_by_name(_preset_items, "preset_name")
 
 
 def _on_preset(self, context):
