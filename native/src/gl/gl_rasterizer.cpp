@@ -12,20 +12,17 @@
 
 namespace glint::gl {
 
-void GlState::release_raster_targets() {
-  if (raster_.fbo) gl_.DeleteFramebuffers(1, &raster_.fbo);
-  if (raster_.depth) gl_.DeleteRenderbuffers(1, &raster_.depth);
-  for (GLuint& c : raster_.color)
+void GlState::release_targets(RasterTargets& t) {
+  if (t.fbo) gl_.DeleteFramebuffers(1, &t.fbo);
+  if (t.depth) gl_.DeleteRenderbuffers(1, &t.depth);
+  for (GLuint& c : t.color)
     if (c) gl_.DeleteTextures(1, &c);
-  raster_ = RasterTargets{};
+  t = RasterTargets{};
 }
 
 void GlState::release_raster() {
-  release_raster_targets();
-  if (back_.fbo) gl_.DeleteFramebuffers(1, &back_.fbo);
-  if (back_.depth) gl_.DeleteRenderbuffers(1, &back_.depth);
-  if (back_.color) gl_.DeleteTextures(1, &back_.color);
-  back_ = BackTargets{};
+  release_targets(raster_);
+  release_targets(back_);
   if (raster_vao_) gl_.DeleteVertexArrays(1, &raster_vao_);
   raster_vao_ = 0;
   for (GLuint& b : buffers_)
@@ -36,47 +33,47 @@ void GlState::release_raster() {
   normal_map_textures_.clear();
 }
 
-void GlState::raster_targets(int w, int h) {
-  if (raster_.fbo && raster_.w == w && raster_.h == h) return;
-  release_raster_targets();
+void GlState::raster_targets(RasterTargets& t, int colors, int w, int h, const char* what,
+                             const char* pass) {
+  if (t.fbo && t.w == w && t.h == h) return;
+  release_targets(t);
   const ContextInfo& ci = info();
   if (w > ci.max_renderbuffer_size || h > ci.max_renderbuffer_size) {
     throw Error("glint GL: " + size_text(w, h) + " is larger than this OpenGL's depth buffers allow (" +
                 "GL_MAX_RENDERBUFFER_SIZE " + std::to_string(ci.max_renderbuffer_size) + " on " +
                 ci.renderer + "). Use backend=\"cpu\" for this size.");
   }
-  check_size(w, h, "rasterize", 4);
+  check_size(w, h, pass, colors + 1);
   while (gl_.GetError() != GL_NO_ERROR) {
   }
-  gl_.GenFramebuffers(1, &raster_.fbo);
-  gl_.BindFramebuffer(GL_FRAMEBUFFER, raster_.fbo);
-  gl_.GenTextures(3, raster_.color);
+  gl_.GenFramebuffers(1, &t.fbo);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+  gl_.GenTextures(colors, t.color);
   scratch_unit();
-  for (int i = 0; i < 3; ++i) {
-    gl_.BindTexture(GL_TEXTURE_2D, raster_.color[i]);
+  for (int i = 0; i < colors; ++i) {
+    gl_.BindTexture(GL_TEXTURE_2D, t.color[i]);
     gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
     gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
-    gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_TEXTURE_2D,
-                             raster_.color[i], 0);
+    gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_TEXTURE_2D, t.color[i], 0);
   }
-  gl_.GenRenderbuffers(1, &raster_.depth);
-  gl_.BindRenderbuffer(GL_RENDERBUFFER, raster_.depth);
+  gl_.GenRenderbuffers(1, &t.depth);
+  gl_.BindRenderbuffer(GL_RENDERBUFFER, t.depth);
   gl_.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
-  gl_.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, raster_.depth);
+  gl_.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.depth);
   const GLenum err = gl_.GetError();
   if (err != GL_NO_ERROR) {
-    raster_.w = raster_.h = 0;
-    if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, "rasterize", 4);
-    throw Error(std::string("glint GL: allocating the G-buffer targets failed: ") + gl_error_name(err));
+    t.w = t.h = 0;
+    if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, pass, colors + 1);
+    throw Error(std::string("glint GL: allocating ") + what + " targets failed: " + gl_error_name(err));
   }
   const GLenum status = gl_.CheckFramebufferStatus(GL_FRAMEBUFFER);
   if (status != GL_FRAMEBUFFER_COMPLETE)
-    throw Error("glint GL: the G-buffer framebuffer (3 x RGBA32F + DEPTH32F) is incomplete on " +
-                ci.renderer);
-  raster_.w = w;
-  raster_.h = h;
+    throw Error(std::string("glint GL: ") + what + " framebuffer (" + std::to_string(colors) +
+                " x RGBA32F + DEPTH32F) is incomplete on " + ci.renderer);
+  t.w = w;
+  t.h = h;
 }
 
 void GlState::buffer_data(int index, GLenum target, size_t bytes, const void* data, const char* what) {
@@ -105,7 +102,7 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   const int w = in.width, h = in.height;
   const Mesh& mesh = in.mesh;
   const size_t tris = mesh.triangle_count();
-  raster_targets(w, h);
+  raster_targets(raster_, 3, w, h, "the G-buffer", "rasterize");
 
   // Triangles with a non-finite corner are skipped, as on the CPU: they are
   // collapsed to a point (zero area covers nothing). Corner normals that are
@@ -307,32 +304,7 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
 // surface (read from the front pass's position target, still on the GPU).
 Image GlState::rasterize_back(int w, int h, size_t tris, double base, double depth_scale,
                               const float* proj) {
-  if (!(back_.fbo && back_.w == w && back_.h == h)) {
-    if (back_.fbo) gl_.DeleteFramebuffers(1, &back_.fbo);
-    if (back_.depth) gl_.DeleteRenderbuffers(1, &back_.depth);
-    if (back_.color) gl_.DeleteTextures(1, &back_.color);
-    back_ = BackTargets{};
-    while (gl_.GetError() != GL_NO_ERROR) {
-    }
-    gl_.GenFramebuffers(1, &back_.fbo);
-    gl_.BindFramebuffer(GL_FRAMEBUFFER, back_.fbo);
-    gl_.GenTextures(1, &back_.color);
-    scratch_unit();
-    gl_.BindTexture(GL_TEXTURE_2D, back_.color);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-    gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
-    gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, back_.color, 0);
-    gl_.GenRenderbuffers(1, &back_.depth);
-    gl_.BindRenderbuffer(GL_RENDERBUFFER, back_.depth);
-    gl_.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
-    gl_.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, back_.depth);
-    const GLenum err = gl_.GetError();
-    if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, "the back-face layer", 2);
-    if (err != GL_NO_ERROR)
-      throw Error(std::string("glint GL: allocating the back-face layer failed: ") + gl_error_name(err));
-    back_.w = w;
-    back_.h = h;
-  }
+  raster_targets(back_, 1, w, h, "the back-face layer", "rasterize (back-face layer)");
   const GLuint prog = program("gbuffer_back.frag", "gbuffer.vert");
   gl_.UseProgram(prog);
   gl_.Uniform1fv(loc(prog, "u_proj"), 16, proj);

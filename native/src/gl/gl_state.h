@@ -123,26 +123,26 @@ class GlState {
   Image draw_and_read(int w, int h, const char* pass, int textures);
 
   // --- rasterizer objects, kept between frames like the textures -----------
+  // A framebuffer of `colors` RGBA32F targets and a DEPTH32F buffer: the
+  // G-buffer (3 colours) and the back-face layer (1) are both one of these.
   struct RasterTargets {
     GLuint fbo = 0, depth = 0, color[3] = {0, 0, 0};
     int w = 0, h = 0;
   };
-  RasterTargets raster_;
+  RasterTargets raster_;  // the G-buffer
+  RasterTargets back_;    // the back-face layer
   GLuint raster_vao_ = 0;
   GLuint buffers_[6] = {0, 0, 0, 0, 0, 0};  // positions, normals, uvs, tangents, triangle material, material table
   std::vector<GLuint> normal_map_textures_;
 
-  void release_raster_targets();
+  void release_targets(RasterTargets& t);
 
   void release_raster();
 
-  void raster_targets(int w, int h);
+  // (Re)allocates `t` for a w x h frame when its size changed. `what` names
+  // it in errors ("the G-buffer"), `pass` is the stage for out-of-memory ones.
+  void raster_targets(RasterTargets& t, int colors, int w, int h, const char* what, const char* pass);
   Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
-  struct BackTargets {
-    GLuint fbo = 0, depth = 0, color = 0;
-    int w = 0, h = 0;
-  };
-  BackTargets back_;
   void buffer_data(int index, GLenum target, size_t bytes, const void* data, const char* what);
 
   EglContext ctx_;
