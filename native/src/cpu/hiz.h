@@ -24,9 +24,11 @@ struct HizPyramid {
   // Cells with nothing seen hold (+inf, -inf) and never overlap a ray.
   std::vector<float> range;
 
-  const float* cell(int level, int i, int j) const {
-    return range.data() + (offset[level] + static_cast<size_t>(j) * width[level] + i) * 2;
+  size_t index(int level, int i, int j) const {
+    return offset[level] + static_cast<size_t>(j) * width[level] + i;
   }
+  const float* cell(int level, int i, int j) const { return range.data() + index(level, i, j) * 2; }
+  float* cell(int level, int i, int j) { return range.data() + index(level, i, j) * 2; }
 };
 
 // The inverse projection as floats, row-major: what the base level needs to
@@ -38,9 +40,8 @@ HizCamera hiz_camera(const Mat4& projection);
 
 // Per-texel thickness: back_position's view distance minus the front's where
 // a back surface is known and behind, else `thickness`.
-// Fills `out`, reusing its memory.
-void build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
-                       const HizCamera& cam, float thickness, int threads, HizPyramid& out);
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads);
 
 // Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).
 inline void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {

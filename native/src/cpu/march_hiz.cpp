@@ -310,11 +310,9 @@ HizCamera hiz_camera(const Mat4& projection) {
   return cam;
 }
 
-void build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
-                       const HizCamera& cam, float thickness, int threads, HizPyramid& p) {
-  p.width.clear();
-  p.height.clear();
-  p.offset.clear();
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads) {
+  HizPyramid p;
   int w = position.width, h = position.height;
   size_t cells = 0;
   for (;;) {
@@ -327,7 +325,7 @@ void build_hiz_pyramid(const Image& position, const Image& normal, const Image* 
     h = std::max(1, h / 2);
   }
   p.levels = static_cast<int>(p.width.size());
-  p.range.resize(cells * 2);  // every cell is written below: no clearing needed
+  p.range.resize(cells * 2);
   parallel_rows(0, position.height, threads, [&](int y) {
     float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
     for (int x = 0; x < position.width; ++x)
@@ -347,24 +345,20 @@ void build_hiz_pyramid(const Image& position, const Image& normal, const Image* 
             lo = std::min(lo, c[0]);
             hi = std::max(hi, c[1]);
           }
-        float* o = p.range.data() + (p.offset[l] + static_cast<size_t>(j) * p.width[l] + i) * 2;
+        float* o = p.cell(l, i, j);
         o[0] = lo;
         o[1] = hi;
       }
     });
   }
+  return p;
 }
 
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   Image out(in.position.width, in.position.height);
   const HizCamera cam = hiz_camera(in.projection);
-  // Kept per calling thread: a sequence of frames then reuses the memory
-  // instead of faulting in a fresh ~1.4 x 8 bytes per pixel every time.
-  // (A lambda names a thread_local afresh on every thread: the workers get
-  // this reference, made here, on the calling thread.)
-  static thread_local HizPyramid scratch;
-  HizPyramid& pyr = scratch;
-  build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads, pyr);
+  const HizPyramid pyr =
+      build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
   const Image* spec = in.specular;
   parallel_rows(0, out.height, threads, [&](int y) {
