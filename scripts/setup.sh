@@ -10,7 +10,7 @@ build=${GLINT_BUILD_DIR:-$root/build}
 packages=(
   build-essential cmake ninja-build pkg-config zlib1g-dev
   python3-dev python3-numpy python3-pytest pybind11-dev
-  libglm-dev libopenexr-dev
+  libglm-dev libopenexr-dev libembree-dev
   libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   googletest libgtest-dev libbenchmark-dev
   blender xvfb xauth

@@ -36,6 +36,11 @@ const std::vector<MarchInfo>& march_table() {
          "how far behind a surface is solid (a ray there is blocked: nothing reported), view "
          "units, where no back_position gives the real depth"}},
        false, true, &cpu::trace_hiz, "trace_hiz.frag"},
+      {March::Exact, "exact",
+       "The ground truth: each pixel's mirror ray traced against the scene's triangles (Embree), "
+       "reported where the camera sees the hit; runs on the CPU whatever the backend",
+       {{"max_distance", "length of the reflected ray, view units: the first hit within it counts"}},
+       true, false, &cpu::trace_exact, nullptr},
   };
   return table;
 }

@@ -30,6 +30,8 @@ const std::vector<Preset>& presets() {
        trace_of(March::Hiz, 15.0f, 0.3f, 10, 0.5f)},
       {"high", "Hi-Z walk, 16 cells per level: no ray of the analytic scenes runs out of budget",
        trace_of(March::Hiz, 15.0f, 0.3f, 16, 0.5f)},
+      {"exact", "Every mirror ray traced against the scene's triangles on the CPU: needs mesh",
+       trace_of(March::Exact, 15.0f, 0.3f, 10, 0.5f)},
   };
   return table;
 }

@@ -11,6 +11,7 @@ enum class March {
   Seed,    // the chapter's two-pass march: coarse pass + bisection
   Linear,  // the book's older single march: fixed view-space steps, step back on a hit
   Hiz,     // min/max depth pyramid walk with ray-span hits
+  Exact,   // the mirror ray against the scene's triangles (Embree): the ground truth
 };
 
 enum class Combine {
