@@ -21,6 +21,7 @@ namespace glint::py {
 
 void bind_exr(pyb::module_& m);
 void bind_raster(pyb::module_& m);
+void bind_metrics(pyb::module_& m);
 
 namespace {
 
@@ -283,4 +284,5 @@ PYBIND11_MODULE(glint_core, m) {
 
   bind_exr(m);
   bind_raster(m);
+  bind_metrics(m);
 }
