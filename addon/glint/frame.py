@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import compositor, gather, native
-from .logic import compositing, settings as settings_logic
+from .logic import compositing, geometry, settings as settings_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
 
@@ -36,6 +36,13 @@ def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = Fa
     cam = exp.camera
     return core.rasterize(t.positions, t.normals, t.material_index, exp.materials,
                           cam.projection.astype(np.float32), cam.width, cam.height, backend=backend, **kwargs)
+
+
+def mesh_kwargs(core, exp: gather.SceneExport, march: str) -> dict:
+    """``{"mesh": ...}`` for a march that traces the scene's triangles, else ``{}``."""
+    if core.march_details()[march]["needs_mesh"]:
+        return {"mesh": geometry.trace_mesh(exp.triangles)}
+    return {}
 
 
 def resolve_backend(core, requested: str) -> str:
@@ -102,6 +109,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             return report
         if back_layer:
             kwargs["back_position"] = gbuf["back_position"]
+        kwargs.update(mesh_kwargs(core, exp, kwargs["march"]))
         n_trace = compositing.trace_normals(normal, position, specular)
         proj32 = cam.projection.astype(np.float32)
         with timings.measure("trace"):

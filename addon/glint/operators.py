@@ -8,11 +8,11 @@ import threading
 import bpy
 import numpy as np
 
-from . import compositor, gather, native
-from .frame import rasterize, settings_dict
-from .logic import compositing, settings as settings_logic
+from . import compositor, gather, measure, native
+from .frame import mesh_kwargs, rasterize, settings_dict
+from .logic import compositing, measurement, settings as settings_logic
 from .logic.progress import Cancelled, Progress, Timings
-from .state import STATE
+from .state import STATE, log
 
 
 class GLINT_OT_retry_native(bpy.types.Operator):
@@ -136,6 +136,7 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
         values = settings_dict(scene.glint)
         backend = settings_logic.backend_name(values["backend"])
         kwargs = settings_logic.trace_kwargs(values, core.presets())
+        kwargs.update(mesh_kwargs(core, exp, kwargs["march"]))
         self._result = {"timings": timings}
 
         def work():
@@ -200,7 +201,51 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class GLINT_OT_measure(bpy.types.Operator):
+    """Measure this scene: trace the current frame with Glint's preset and with the
+    exact march, and report precision, recall, pixel error and time (the image
+    'Glint Disagreement' shows where they differ: red false, green right, blue
+    missed, yellow misplaced)"""
+
+    bl_idname = "glint.measure"
+    bl_label = "Measure This Scene"
+
+    repeat: bpy.props.IntProperty(name="Repeat", default=3, min=1, max=50,
+                                  description="Timed runs of each trace (the median is reported)")
+    save_path: bpy.props.StringProperty(name="Save Image", default="", subtype="FILE_PATH",
+                                        description="Also write the disagreement image here (PNG)")
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and context.scene.camera is not None
+
+    def execute(self, context):
+        core = native.load()
+        if core is None:
+            self.report({"ERROR"}, f"Glint: {native.error()}")
+            return {"CANCELLED"}
+        try:
+            result = measure.measure_scene(context.evaluated_depsgraph_get(), context.scene, core, self.repeat)
+        except gather.SkipFrame as exc:
+            self.report({"WARNING"}, f"Glint: nothing to measure ({exc})")
+            return {"CANCELLED"}
+        except (ValueError, RuntimeError, MemoryError) as exc:
+            self.report({"ERROR"}, f"Glint: {type(exc).__name__}: {exc}")
+            return {"CANCELLED"}
+        with STATE.lock:
+            STATE.measurement = {k: v for k, v in result.items() if k != "disagreement"}
+        line = measurement.summary(result)
+        log(f"measured {line}")
+        if self.save_path:
+            img = bpy.data.images[measurement.IMAGE_DISAGREEMENT]
+            img.filepath_raw = bpy.path.abspath(self.save_path)
+            img.file_format = "PNG"
+            img.save()
+        self.report({"INFO"}, f"Glint: {line}")
+        return {"FINISHED"}
+
+
 CLASSES = (GLINT_OT_retry_native, GLINT_OT_cancel, GLINT_OT_report, GLINT_OT_setup_compositor,
-           GLINT_OT_compute_layers)
+           GLINT_OT_compute_layers, GLINT_OT_measure)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -47,6 +47,8 @@ class _State:
         # The last frame's arrays (position, normal, specular, uv, projection),
         # for the debug operators and for tests that inspect an export.
         self.arrays: Dict[str, object] = {}
+        # The last "Measure this scene" figures (logic/measurement.py), for the panel.
+        self.measurement: Dict[str, object] = {}
 
     def log(self, message: str) -> str:
         line = f"{PREFIX} {message}"

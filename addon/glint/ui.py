@@ -4,6 +4,7 @@ from __future__ import annotations
 import bpy
 
 from . import native
+from .logic import measurement
 from .state import STATE
 
 
@@ -102,6 +103,19 @@ class GLINT_PT_debug(_GlintSubPanel, bpy.types.Panel):
         row.operator("glint.setup_compositor", icon="NODETREE")
 
 
-CLASSES = (GLINT_PT_render, GLINT_PT_parameters, GLINT_PT_backend, GLINT_PT_debug)
+class GLINT_PT_accuracy(_GlintSubPanel, bpy.types.Panel):
+    bl_label = "Accuracy"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.operator("glint.measure", icon="DRIVER_DISTANCE")
+        if STATE.measurement:
+            box = layout.box()
+            for line in measurement.panel_lines(STATE.measurement):
+                box.label(text=line)
+            box.label(text=f"Image: {measurement.IMAGE_DISAGREEMENT}", icon="IMAGE_DATA")
+
+
+CLASSES = (GLINT_PT_render, GLINT_PT_parameters, GLINT_PT_backend, GLINT_PT_debug, GLINT_PT_accuracy)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

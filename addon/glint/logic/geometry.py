@@ -123,3 +123,10 @@ def normal_map_with_strength(pixels: np.ndarray, strength: float) -> np.ndarray:
     n = _unit(n)
     n[np.linalg.norm(n, axis=-1) == 0] = flat
     return (n * 0.5 + 0.5).astype(np.float32)
+
+
+def trace_mesh(triangles: Triangles):
+    """``mesh=(vertices [3T, 3], triangles [T, 3])`` for marches that trace the scene's
+    own triangles (the exact march): the export's corners, unshared."""
+    vertices = np.ascontiguousarray(triangles.positions.reshape(-1, 3), dtype=np.float32)
+    return vertices, np.arange(vertices.shape[0], dtype=np.int32).reshape(-1, 3)
