@@ -13,7 +13,7 @@ packages=(
   libglm-dev libopenexr-dev libembree-dev
   libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   googletest libgtest-dev libbenchmark-dev
-  blender xvfb xauth
+  blender xvfb xauth python3-matplotlib
 )
 
 if [[ "${GLINT_NO_APT:-0}" != 1 ]]; then
