@@ -15,7 +15,7 @@ out = args[0]
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(root, "addon"))
 
-from glint import measure, native  # noqa: E402
+from glint import gather, measure, native  # noqa: E402
 
 core = native.load()
 if core is None:
@@ -25,7 +25,11 @@ if len(args) > 1:
     w, h = (int(v) for v in args[1].lower().split("x"))
     scene.render.resolution_x, scene.render.resolution_y = w, h
     scene.render.resolution_percentage = 100
-arrays = measure.frame_arrays(bpy.context.evaluated_depsgraph_get(), core, "cpu")
+try:
+    arrays = measure.frame_arrays(bpy.context.evaluated_depsgraph_get(), core, "cpu")
+except gather.SkipFrame as exc:
+    print(f"blend_gbuffer: SKIP {exc}")
+    sys.exit(3)
 
 # The frame as the engine renders it, for the reflection colour: a short render
 # (few samples: this is the colour reflections pick up, not a beauty frame).

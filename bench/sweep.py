@@ -122,6 +122,10 @@ def analytic_frame(name: str, width: int, height: int) -> dict:
     return frame
 
 
+class SkipScene(Exception):
+    """The scene has nothing to measure (no reflective material in view)."""
+
+
 def npz_frame(path: str) -> dict:
     with np.load(path) as z:
         return {k: z[k] for k in z.files}
@@ -133,6 +137,9 @@ def blend_frame(path: str, width: int, height: int) -> dict:
            os.path.join(here, "blend_gbuffer.py"), "--", out, f"{width}x{height}"]
     env = dict(os.environ, GLINT_CORE_PATH=os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(root, "build")), "python"))
     done = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    skip = [line for line in done.stdout.splitlines() if line.startswith("blend_gbuffer: SKIP")]
+    if skip:
+        raise SkipScene(skip[0][len("blend_gbuffer: SKIP "):])
     if done.returncode != 0 or not os.path.exists(out):
         raise SystemExit(f"sweep: exporting {path} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
     return npz_frame(out)
@@ -183,10 +190,19 @@ def grid_points(marches, grid: dict) -> list:
     return points
 
 
+# Labelled beside the presets: the seed at the chapter's defaults, and the book's
+# older linear march at its own (100 steps, thickness 1).
+REFERENCE_POINTS = {
+    "seed-defaults": dict(march="seed", max_distance=15.0, resolution=0.3, steps=10, thickness=0.5),
+    "linear-book": dict(march="linear", max_distance=15.0, resolution=0.3, steps=100, thickness=1.0),
+}
+
+
 def preset_points() -> list:
     # float32 presets read back as 0.30000001192...: round to what a user typed.
-    return [dict({k: round(v, 6) if isinstance(v, float) else v for k, v in kw.items()}, preset=name)
-            for name, kw in glint_core.presets().items()]
+    points = [dict({k: round(v, 6) if isinstance(v, float) else v for k, v in kw.items()}, preset=name)
+              for name, kw in glint_core.presets().items()]
+    return points + [dict(kw, preset=name) for name, kw in REFERENCE_POINTS.items()]
 
 
 def pareto(times, scores) -> np.ndarray:
@@ -347,8 +363,12 @@ def main(argv=None):
             "max_distance": args.max_distance}
     os.makedirs(args.out, exist_ok=True)
     for spec in args.scene:
-        rows = sweep(spec, args.sizes, marches, grid, args.backends.split(","), args.repeat,
-                     not args.no_back_layer)
+        try:
+            rows = sweep(spec, args.sizes, marches, grid, args.backends.split(","), args.repeat,
+                         not args.no_back_layer)
+        except SkipScene as exc:
+            print(f"sweep: {spec}: skipped, {exc}")
+            continue
         label = scene_label(spec)
         write_csv(os.path.join(args.out, f"{label}.csv"), rows)
         if not args.no_plot:
