@@ -8,6 +8,7 @@
 
 #include "convert.h"
 #include "glint/backend.h"
+#include "glint/brdf.h"
 #include "glint/errors.h"
 #include "glint/marches.h"
 #include "glint/mesh.h"
@@ -111,8 +112,9 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
                       const pyb::handle& projection, float max_distance, float resolution,
                       int steps, float thickness, const std::string& march, int blur_size,
                       float blur_separation, const std::string& combine,
-                      const pyb::handle& back_position, const pyb::handle& mesh,
-                      const std::string& backend, int threads) {
+                      const std::string& weighting, const std::string& blur,
+                      const pyb::handle& specular_base, const pyb::handle& back_position,
+                      const pyb::handle& mesh, const std::string& backend, int threads) {
   PipelineInputs in;
   in.position = image_from_array(position, "position", 1.0f, 4);
   in.normal = image_from_array(normal, "normal", 0.0f, 3);
@@ -121,9 +123,15 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
   in.projection = projection_from_array(projection);
   if (std::optional<Image> back = optional_image(back_position, "back_position", in.position))
     in.back_position = std::move(*back);
+  if (!specular_base.is_none()) {
+    in.specular_base = image_from_array(specular_base, "specular_base", 0.0f, 3);
+    require_same_size(in.position, "position", in.specular_base, "specular_base");
+  }
   const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
   in.mesh = tris ? &*tris : nullptr;
   PipelineOptions opt;
+  opt.weighting = parse_weighting(weighting);
+  opt.blur_mode = parse_blur_mode(blur);
   opt.trace = trace_options(max_distance, resolution, steps, thickness, march);
   opt.blur.size = blur_size;
   opt.blur.separation = blur_separation;
@@ -174,6 +182,7 @@ PYBIND11_MODULE(glint_core, m) {
 
   m.attr("__version__") = "0.1.0";
   m.attr("LAYERS") = pyb::cast(pipeline_layer_names());
+  m.attr("STAGES") = pyb::cast(pipeline_stage_names());
   m.attr("MAX_SHININESS") = kMaxShininess;
   m.attr("MAX_STEPS") = kMaxSteps;
 
@@ -196,11 +205,17 @@ PYBIND11_MODULE(glint_core, m) {
   m.def("pipeline", &py_pipeline, "position"_a, "normal"_a, "specular"_a, "color"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10,
         "thickness"_a = 0.5f, "march"_a = "seed", "blur_size"_a = 8, "blur_separation"_a = 1.0f,
-        "combine"_a = "over", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
+        "combine"_a = "over", "weighting"_a = to_string(PipelineOptions{}.weighting),
+        "blur"_a = to_string(PipelineOptions{}.blur_mode), "specular_base"_a = pyb::none(),
+        "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
         "backend"_a = "cpu", "threads"_a = 0,
         "The whole pipeline. Returns a dict of float32 [H, W, 4] layers named by LAYERS\n"
-        "('uv', 'reflection_color', 'reflection_blur', 'reflection', 'combined') and\n"
-        "'stats': backend used, per-stage timings_ms, skipped stages, pixel counts.");
+        "('uv', 'reflection_color', 'reflection_blur', 'specular_weight', 'reflection',\n"
+        "'combined') and 'stats': backend used, per-stage timings_ms, skipped stages, pixel\n"
+        "counts. weighting: 'physical' (F0 * A + B, split-sum) or 'seed' (mean F0); blur:\n"
+        "'cone' (ray length x GGX cone, mip chain) or 'box' (blur_size, blur_separation);\n"
+        "specular_base: the engine's own specular (rgb), replaced where a hit is found\n"
+        "(combine 'over' only).");
 
   m.def(
       "reflection_color",
@@ -241,41 +256,104 @@ PYBIND11_MODULE(glint_core, m) {
       "(2 * size + 1)^2 box average of all four channels, taps `separation` pixels apart.");
 
   m.def(
-      "reflection",
-      [](const pyb::handle& color, const pyb::handle& blurred, const pyb::handle& specular,
-         const std::string& backend) {
-        Image c = image_from_array(color, "reflection_color", 0.0f, 4);
-        Image b = image_from_array(blurred, "reflection_blur", 0.0f, 4);
-        Image s = image_from_array(specular, "specular", 0.0f, 4);
+      "specular_weight",
+      [](const pyb::handle& position, const pyb::handle& normal, const pyb::handle& specular,
+         const pyb::handle& projection, const std::string& backend) {
+        const Image pos = image_from_array(position, "position", 1.0f, 4);
+        const Image nrm = image_from_array(normal, "normal", 0.0f, 3);
+        const Image spec = image_from_array(specular, "specular", 0.0f, 4);
+        const Mat4 proj = projection_from_array(projection);
         auto be = get_backend(backend);
         pyb::gil_scoped_release release;
-        Image r = be->reflection(c, b, s);
+        Image r = be->specular_weight(pos, nrm, spec, proj);
         pyb::gil_scoped_acquire acquire;
         return array_from_image(r);
       },
-      "reflection_color"_a, "reflection_blur"_a, "specular"_a, pyb::kw_only(), "backend"_a = "cpu",
-      "mix(colour, blurred, roughness) * specular amount, roughness = 1 - shininess.");
+      "position"_a, "normal"_a, "specular"_a, "projection"_a, pyb::kw_only(), "backend"_a = "cpu",
+      "Physical reflection weight: rgb = F0 * A + B (split-sum table at N.V and roughness),\n"
+      "a = mean of the rgb; 0 where a pixel is unseen or does not reflect.");
+
+  m.def(
+      "cone_blur",
+      [](const pyb::handle& color, const pyb::handle& uv, const pyb::handle& specular,
+         const std::string& backend) {
+        Image c = image_from_array(color, "reflection_color", 0.0f, 4);
+        Image u = image_from_array(uv, "uv", 0.0f, 4);
+        Image s = image_from_array(specular, "specular", 0.0f, 4);
+        auto be = get_backend(backend);
+        pyb::gil_scoped_release release;
+        Image r = be->cone_blur(c, u, s);
+        pyb::gil_scoped_acquire acquire;
+        return array_from_image(r);
+      },
+      "reflection_color"_a, "uv"_a, "specular"_a, pyb::kw_only(), "backend"_a = "cpu",
+      "The reflection colour blurred by each pixel's GGX cone: footprint 2 * ray length in\n"
+      "pixels * cone tan, read trilinearly from a 2x2 box mip chain.");
+
+  m.def(
+      "reflection",
+      [](const pyb::handle& color, const pyb::handle& blurred, const pyb::handle& specular,
+         const pyb::handle& weight, const std::string& backend) {
+        Image c = image_from_array(color, "reflection_color", 0.0f, 4);
+        std::optional<Image> b, w;
+        if (!blurred.is_none()) b = image_from_array(blurred, "reflection_blur", 0.0f, 4);
+        Image s = image_from_array(specular, "specular", 0.0f, 4);
+        if (!weight.is_none()) w = image_from_array(weight, "weight", 0.0f, 4);
+        auto be = get_backend(backend);
+        pyb::gil_scoped_release release;
+        Image r = be->reflection(c, b ? &*b : nullptr, s, w ? &*w : nullptr);
+        pyb::gil_scoped_acquire acquire;
+        return array_from_image(r);
+      },
+      "reflection_color"_a, "reflection_blur"_a, "specular"_a, pyb::kw_only(),
+      "weight"_a = pyb::none(), "backend"_a = "cpu",
+      "mix(colour, blurred, roughness) (the colour alone when reflection_blur is None) times\n"
+      "weight (rgb on colour, a on alpha) or, without one, the specular amount.");
 
   m.def(
       "combine",
       [](const pyb::handle& base, const pyb::handle& reflection, const std::string& mode,
-         const std::string& backend) {
+         const pyb::handle& specular_base, const pyb::handle& coverage, const std::string& backend) {
         Image b = image_from_array(base, "color", 1.0f, 3);
         Image r = image_from_array(reflection, "reflection", 0.0f, 4);
         const Combine c = parse_combine(mode);
+        std::optional<Image> sb, cov;
+        if (!specular_base.is_none()) sb = image_from_array(specular_base, "specular_base", 0.0f, 3);
+        if (!coverage.is_none()) cov = image_from_array(coverage, "coverage", 0.0f, 4);
         auto be = get_backend(backend);
         pyb::gil_scoped_release release;
-        Image out = be->combine(b, r, c);
+        Image out = be->combine(b, r, c, sb ? &*sb : nullptr, cov ? &*cov : nullptr);
         pyb::gil_scoped_acquire acquire;
         return array_from_image(out);
       },
-      "color"_a, "reflection"_a, pyb::kw_only(), "mode"_a = "over", "backend"_a = "cpu",
-      "'over': base * (1 - a) + reflection.rgb (visibility once); 'seed': the demo's mix.");
+      "color"_a, "reflection"_a, pyb::kw_only(), "mode"_a = "over", "specular_base"_a = pyb::none(),
+      "coverage"_a = pyb::none(), "backend"_a = "cpu",
+      "'over': base * (1 - a) + reflection.rgb (visibility once); 'seed': the demo's mix.\n"
+      "With specular_base (and coverage, whose alpha is the share the trace found):\n"
+      "max(base - specular_base * coverage.a, 0) + reflection.rgb.");
 
   m.def("shininess_to_alpha", &shininess_to_alpha, "shininess"_a,
         "clamp(shininess / 127.75, 0, 1): the specular buffer's alpha.");
   m.def("shininess_from_hardness", &shininess_from_hardness, "hardness"_a,
         "Blender Internal hardness (1..511) to shininess: hardness / 4 (511 -> 127.75).");
+  m.def(
+      "env_brdf",
+      [](float n_dot_v, float alpha) {
+        float a, b;
+        env_brdf(n_dot_v, alpha, &a, &b);
+        return pyb::make_tuple(a, b);
+      },
+      "n_dot_v"_a, "alpha"_a,
+      "(A, B) of the split-sum table at N.V and GGX alpha (bilinear between its nodes).");
+  m.def("ggx_alpha", [](float shininess_alpha) {
+        const float s[4] = {1.0f, 1.0f, 1.0f, shininess_alpha};
+        return ggx_alpha_of(s);
+      }, "shininess_alpha"_a,
+      "GGX alpha of a specular-buffer alpha: sqrt(2 / (511 a + 2)), 0 at a >= 1 (a mirror).");
+  m.def("cone_tan", &cone_tan, "alpha"_a,
+        "tan of the reflection cone's half-angle for GGX alpha: 2 a / (1 - a^2), capped.");
+  m.attr("WEIGHTINGS") = pyb::make_tuple(to_string(Weighting::Physical), to_string(Weighting::Seed));
+  m.attr("BLURS") = pyb::make_tuple(to_string(BlurMode::Cone), to_string(BlurMode::Box));
   m.def("gl_compiled_in", &gl_compiled_in, "True when this build has the OpenGL backend.");
   m.def(
       "backend_name",

@@ -65,4 +65,20 @@ Combine parse_combine(const std::string& name) {
 
 const char* to_string(Combine c) { return c == Combine::Over ? "over" : "seed"; }
 
+Weighting parse_weighting(const std::string& name) {
+  if (name == "physical") return Weighting::Physical;
+  if (name == "seed") return Weighting::Seed;
+  throw InvalidArgument("weighting", "expected \"physical\" or \"seed\", got \"" + name + "\"");
+}
+
+const char* to_string(Weighting w) { return w == Weighting::Physical ? "physical" : "seed"; }
+
+BlurMode parse_blur_mode(const std::string& name) {
+  if (name == "cone") return BlurMode::Cone;
+  if (name == "box") return BlurMode::Box;
+  throw InvalidArgument("blur", "expected \"cone\" or \"box\", got \"" + name + "\"");
+}
+
+const char* to_string(BlurMode b) { return b == BlurMode::Cone ? "cone" : "box"; }
+
 }  // namespace glint

@@ -66,7 +66,14 @@ SceneNeeds survey(const PipelineInputs& in, int threads) {
 
 const std::vector<std::string>& pipeline_layer_names() {
   static const std::vector<std::string> names = {"uv", "reflection_color", "reflection_blur",
-                                                 "reflection", "combined"};
+                                                 "specular_weight", "reflection", "combined"};
+  return names;
+}
+
+const std::vector<std::string>& pipeline_stage_names() {
+  static const std::vector<std::string> names = {"survey",    "trace",     "reflection_color",
+                                                 "specular_weight", "cone_blur", "box_blur",
+                                                 "reflection", "combine"};
   return names;
 }
 
@@ -75,11 +82,18 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   require_same_size(in.position, "position", in.normal, "normal");
   require_same_size(in.position, "position", in.specular, "specular");
   require_same_size(in.position, "position", in.color, "color");
+  const Image* specular_base = in.specular_base.empty() ? nullptr : &in.specular_base;
+  if (specular_base) {
+    require_same_size(in.position, "position", in.specular_base, "specular_base");
+    if (opt.combine != Combine::Over)
+      throw InvalidArgument("specular_base", "is replaced only with combine=\"over\"");
+  }
   validate_projection(in.projection);
   validate(opt);
 
   PipelineResult res;
   const int w = in.position.width, h = in.position.height;
+  const char* blur_stage = opt.blur_mode == BlurMode::Cone ? "cone_blur" : "box_blur";
   auto t0 = Clock::now();
   const SceneNeeds needs = survey(in, opt.threads);
   res.timings.push_back({"survey", ms_since(t0), false});
@@ -89,12 +103,9 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   if (needs.reflective == 0) {
     // Nothing on screen reflects: the base comes back unchanged and no
     // stage runs (the layers are zero so a debug view still has them).
-    for (const char* stage : {"trace", "reflection_color", "box_blur", "reflection", "combine"})
+    for (const char* stage : {"trace", "reflection_color", "specular_weight", blur_stage, "reflection", "combine"})
       res.timings.push_back({stage, 0.0, true});
-    res.layers["uv"] = Image(w, h);
-    res.layers["reflection_color"] = Image(w, h);
-    res.layers["reflection_blur"] = Image(w, h);
-    res.layers["reflection"] = Image(w, h);
+    for (const auto& name : pipeline_layer_names()) res.layers[name] = Image(w, h);
     res.layers["combined"] = in.color;
     return res;
   }
@@ -110,27 +121,60 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   Image color = backend.reflection_color(uv, in.color);
   res.timings.push_back({"reflection_color", ms_since(t0), false});
 
+  Image weight;
+  if (opt.weighting == Weighting::Physical) {
+    t0 = Clock::now();
+    weight = backend.specular_weight(in.position, in.normal, in.specular, in.projection);
+    res.timings.push_back({"specular_weight", ms_since(t0), false});
+  } else {
+    weight = Image(w, h);  // the seed's amount is applied inside the reflection stage
+    res.timings.push_back({"specular_weight", 0.0, true});
+  }
+
+  // The blurred colour; with the cone it already holds the roughness, with the
+  // box the reflection stage mixes it in by roughness.
   Image blurred;
-  if (needs.rough == 0 || opt.blur.size == 0) {
+  const bool box = opt.blur_mode == BlurMode::Box;
+  if (needs.rough == 0 || (box && opt.blur.size == 0)) {
     blurred = color;  // read nowhere: roughness is zero wherever it would be
-    res.timings.push_back({"box_blur", 0.0, true});
+    res.timings.push_back({blur_stage, 0.0, true});
   } else {
     t0 = Clock::now();
-    blurred = backend.box_blur(color, opt.blur, needs.box);
-    res.timings.push_back({"box_blur", ms_since(t0), false});
+    blurred = box ? backend.box_blur(color, opt.blur, needs.box) : backend.cone_blur(color, uv, in.specular);
+    res.timings.push_back({blur_stage, ms_since(t0), false});
   }
 
   t0 = Clock::now();
-  Image reflection = backend.reflection(color, blurred, in.specular);
+  const Image* weight_in = opt.weighting == Weighting::Physical ? &weight : nullptr;
+  Image reflection = box ? backend.reflection(color, &blurred, in.specular, weight_in)
+                         : backend.reflection(blurred, nullptr, in.specular, weight_in);
   res.timings.push_back({"reflection", ms_since(t0), false});
 
   t0 = Clock::now();
-  Image combined = backend.combine(in.color, reflection, opt.combine);
+  // The share of the lobe the trace found is the blurred colour's alpha for
+  // the cone, and the roughness mix of both alphas for the box; the combine
+  // reads it from the alpha of `coverage`.
+  Image coverage;
+  if (specular_base) {
+    if (box) {
+      coverage = Image(w, h);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const float r = roughness_of(in.specular.px(x, y));
+          coverage.px(x, y)[3] = color.px(x, y)[3] * (1.0f - r) + blurred.px(x, y)[3] * r;
+        }
+    } else {
+      coverage = blurred;
+    }
+  }
+  Image combined = backend.combine(in.color, reflection, opt.combine, specular_base,
+                                   specular_base ? &coverage : nullptr);
   res.timings.push_back({"combine", ms_since(t0), false});
 
   res.layers["uv"] = std::move(uv);
   res.layers["reflection_color"] = std::move(color);
   res.layers["reflection_blur"] = std::move(blurred);
+  res.layers["specular_weight"] = std::move(weight);
   res.layers["reflection"] = std::move(reflection);
   res.layers["combined"] = std::move(combined);
   return res;

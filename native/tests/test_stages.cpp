@@ -143,10 +143,15 @@ TEST(Pipeline, MirrorOnlySceneSkipsTheBlur) {
   PipelineResult r = run_pipeline(*cpu, {g.position, g.normal, g.specular, g.color, g.projection}, {});
   EXPECT_GT(r.reflective_pixels, 0u);
   EXPECT_EQ(r.rough_pixels, 0u);
-  bool blur_skipped = false;
-  for (const auto& t : r.timings)
-    if (t.stage == "box_blur") blur_skipped = t.skipped;
-  EXPECT_TRUE(blur_skipped);
+  for (BlurMode mode : {BlurMode::Cone, BlurMode::Box}) {
+    PipelineOptions opt;
+    opt.blur_mode = mode;
+    PipelineResult r = run_pipeline(*cpu, {g.position, g.normal, g.specular, g.color, g.projection}, opt);
+    bool blur_skipped = false;
+    for (const auto& t : r.timings)
+      if (t.stage == to_string(mode) + std::string("_blur")) blur_skipped = t.skipped;
+    EXPECT_TRUE(blur_skipped) << to_string(mode);
+  }
 }
 
 TEST(Pipeline, NonFiniteShininessIsSmoothWhenDecidingOnTheBlur) {
@@ -165,7 +170,7 @@ TEST(Pipeline, NonFiniteShininessIsSmoothWhenDecidingOnTheBlur) {
   PipelineResult r = run_pipeline(*cpu, {g.position, g.normal, g.specular, g.color, g.projection}, {});
   EXPECT_EQ(r.rough_pixels, 0u);
   for (const auto& t : r.timings)
-    if (t.stage == "box_blur") EXPECT_TRUE(t.skipped);
+    if (t.stage == "cone_blur" || t.stage == "box_blur") EXPECT_TRUE(t.skipped);
 }
 
 // parallel_rows is the CPU backend's only thread machinery; these pin down

@@ -213,7 +213,7 @@ def test_png_is_the_srgb_encoded_combined_layer(result):
 
 def test_timings_are_printed(result):
     stdout = result["proc"].stdout
-    for stage in ("trace", "reflection_color", "box_blur", "reflection", "combine"):
+    for stage in ("trace", "reflection_color", "specular_weight", "cone_blur", "reflection", "combine"):
         assert f"  {stage} " in stdout, stdout
 
 

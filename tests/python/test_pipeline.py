@@ -7,7 +7,10 @@ import pytest
 import analytic as A
 import glint_core
 
-STAGES = ["trace", "reflection_color", "box_blur", "reflection", "combine"]
+# The stages a default run (weighting "physical", blur "cone") reports.
+STAGES = ["trace", "reflection_color", "specular_weight", "cone_blur", "reflection", "combine"]
+# The seed's reflection and blur; test_look.py covers the physical ones.
+SEED_LOOK = dict(weighting="seed", blur="box")
 
 
 # --- formulas --------------------------------------------------------------------------
@@ -206,14 +209,14 @@ def test_pipeline_is_its_stages_chained(kind):
                                                      specular=(0.8, 0.7, 0.9), alpha=0.6))
     gb = A.render(sc, W, H)
     kw = dict(max_distance=12.0, resolution=0.5, steps=8, thickness=0.7)
-    out = run_pipeline(gb, blur_size=3, blur_separation=1.5, **kw)
+    out = run_pipeline(gb, blur_size=3, blur_separation=1.5, **SEED_LOOK, **kw)
     seen = gb["position"][..., 3] > 0
     spec = gb["specular"]
     reflective = seen & (spec[..., :3].sum(axis=2) > 0)
     rough = reflective & (spec[..., 3] < 1)
     assert out["stats"]["reflective_pixels"] == reflective.sum()
     assert out["stats"]["rough_pixels"] == rough.sum()
-    assert out["stats"]["skipped"] == []
+    assert out["stats"]["skipped"] == ["specular_weight"]
 
     uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], **kw)
     np.testing.assert_array_equal(out["uv"], np.where(reflective[..., None], uv, 0))
@@ -248,14 +251,15 @@ def test_no_reflective_pixel_returns_the_base_unchanged():
         assert out["combined"].tobytes() == want.tobytes(), "base not returned bit-identical"
         assert sorted(out["stats"]["skipped"]) == sorted(STAGES)
         assert out["stats"]["reflective_pixels"] == 0
-        for name in ("uv", "reflection_color", "reflection_blur", "reflection"):
+        for name in ("uv", "reflection_color", "reflection_blur", "specular_weight", "reflection"):
             assert np.all(out[name] == 0)
 
 
 def test_mirror_only_scene_skips_the_blur():
     gb = A.render(red_sphere_scene("persp", floor_alpha=1.0), W, H)
-    out = run_pipeline(gb)
-    assert out["stats"]["skipped"] == ["box_blur"]
+    assert run_pipeline(gb)["stats"]["skipped"] == ["cone_blur"]
+    out = run_pipeline(gb, **SEED_LOOK)
+    assert out["stats"]["skipped"] == ["specular_weight", "box_blur"]
     assert out["stats"]["rough_pixels"] == 0 and out["stats"]["reflective_pixels"] > 0
     # With no rough pixel the reflection is the unblurred colour times the amount.
     np.testing.assert_allclose(out["reflection"], reflection_formula(
@@ -265,8 +269,8 @@ def test_mirror_only_scene_skips_the_blur():
 
 def test_blur_size_zero_skips_the_blur():
     gb = A.render(red_sphere_scene("persp", floor_alpha=0.3), W, H)
-    assert "box_blur" not in run_pipeline(gb)["stats"]["skipped"]
-    out = run_pipeline(gb, blur_size=0)
+    assert "box_blur" not in run_pipeline(gb, blur="box")["stats"]["skipped"]
+    out = run_pipeline(gb, blur="box", blur_size=0)
     assert out["stats"]["skipped"] == ["box_blur"]
     np.testing.assert_array_equal(out["reflection_blur"], out["reflection_color"])
 

@@ -19,6 +19,18 @@ enum class Combine {
   Seed,  // mix(base, reflection.rgb, reflection.a): the demo's base-combine, visibility twice
 };
 
+// How strongly a pixel reflects; the formulas are in docs/look-core.md.
+enum class Weighting {
+  Physical,  // F0 * A + B, the split-sum environment BRDF at the pixel's N.V and roughness
+  Seed,      // the seed's specular amount: mean of the specular rgb (F0), no Fresnel
+};
+
+// How rough reflections are blurred; docs/look-core.md.
+enum class BlurMode {
+  Cone,  // per pixel, a footprint of ray length x GGX cone width, from a mip chain
+  Box,   // the book's fixed (2 size + 1)^2 box, mixed in by roughness
+};
+
 struct TraceOptions {
   float max_distance = 15.0f;  // view-space units (Blender units): longest reflected ray
   float resolution = 0.3f;     // [0, 1]: share of the on-screen pixels the coarse pass visits
@@ -36,6 +48,8 @@ struct PipelineOptions {
   TraceOptions trace;
   BlurOptions blur;
   Combine combine = Combine::Over;
+  Weighting weighting = Weighting::Physical;
+  BlurMode blur_mode = BlurMode::Cone;  // Python keyword `blur`; BlurOptions apply to Box only
   int threads = 0;  // CPU worker threads; 0 = one per hardware thread
 };
 
@@ -51,6 +65,10 @@ void validate_threads(int threads);
 // Name <-> enum, for the bindings, the CLI and EXR headers (marches: marches.h).
 Combine parse_combine(const std::string& name);  // "over" | "seed"
 const char* to_string(Combine c);
+Weighting parse_weighting(const std::string& name);  // "physical" | "seed"
+const char* to_string(Weighting w);
+BlurMode parse_blur_mode(const std::string& name);  // "cone" | "box"
+const char* to_string(BlurMode b);
 
 // Limits, public so that docs, bindings and tests quote the same numbers.
 constexpr int kMaxSteps = 1000000;

@@ -16,6 +16,10 @@ struct PipelineInputs {
   Image color;     // the base image the reflections are taken from and composited over
   Mat4 projection;
   Image back_position;                // optional (empty: none); see TraceInputs
+  // Optional (empty: none): the engine's own specular contribution to `color`
+  // (rgb), which the reflection replaces where the trace finds a hit
+  // (Backend::combine; combine "over" only).
+  Image specular_base;
   const TriangleMesh* mesh = nullptr;  // for marches that need the triangles
 };
 
@@ -26,8 +30,9 @@ struct StageTiming {
 };
 
 struct PipelineResult {
-  // Named layers: "uv", "reflection_color", "reflection_blur", "reflection",
-  // "combined". Skipped stages leave zero layers (the blur: the unblurred colour).
+  // Named layers: "uv", "reflection_color", "reflection_blur",
+  // "specular_weight", "reflection", "combined". Skipped stages leave zero
+  // layers (the blur: the unblurred colour; the weight with weighting "seed").
   std::map<std::string, Image> layers;
   std::vector<StageTiming> timings;
   size_t reflective_pixels = 0;  // pixels with a positive specular amount that were seen
@@ -38,5 +43,8 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
 
 // Layer names in pipeline order, for the bindings, EXR writer and CLI.
 const std::vector<std::string>& pipeline_layer_names();
+// Every stage name PipelineResult::timings can hold, in pipeline order (a run
+// has one of the two blurs, the one its BlurMode names).
+const std::vector<std::string>& pipeline_stage_names();
 
 }  // namespace glint

@@ -5,10 +5,14 @@
 //   G-buffer (position, normal, specular)
 //     -> trace            reflected uv + visibility  (u, v, vis, vis)
 //     -> reflection_color colour at the reflected uv, premultiplied by visibility
-//     -> box_blur         (2 * size + 1)^2 box of the reflection colour
-//     -> reflection       mix(colour, blurred, roughness) * specular amount
-//     -> combine          the reflection over the base image
+//     -> specular_weight  F0 * A + B from the split-sum table (weighting "physical")
+//     -> cone_blur        per-pixel footprint from a mip chain (blur "cone"), or
+//        box_blur         (2 * size + 1)^2 box of the reflection colour (blur "box")
+//     -> reflection       blurred colour * weight (or the seed's amount)
+//     -> combine          the reflection over the base image, optionally replacing
+//                         the engine's own specular
 #pragma once
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -18,6 +22,9 @@
 #include "glint/raster.h"
 
 namespace glint {
+
+// Blender Internal's largest hardness (511) as the book's shininess (/ 4).
+constexpr float kMaxShininess = 127.75f;
 
 // Specular amount and roughness of one specular-buffer pixel, as the seed's
 // reflection pass defines them. Shared so every backend and test agrees.
@@ -30,6 +37,27 @@ inline float roughness_of(const float* spec) {
   const float s = spec[3] - spec[3] == 0.0f ? spec[3] : 1.0f;
   return 1.0f - (s < 0.0f ? 0.0f : (s > 1.0f ? 1.0f : s));
 }
+// GGX width alpha (Blender's Roughness squared) of a specular-buffer pixel:
+// the inverse of the add-on's mapping (docs/addon.md) shininess alpha =
+// hardness / 511 with hardness = clamp(2 / alpha^2 - 2, 1, 511). The clamp at
+// 511 (every Roughness <= 0.25) reads as a mirror, alpha 0, so that pixels
+// roughness_of() calls smooth are smooth here too. docs/look-core.md.
+inline float ggx_alpha_of(const float* spec) {
+  const float r = roughness_of(spec);
+  if (!(r > 0.0f)) return 0.0f;
+  const float hardness = (1.0f - r) * (4.0f * kMaxShininess);
+  return std::sqrt(2.0f / (hardness + 2.0f));
+}
+// tan of the half-angle of a GGX reflection cone: the half-vector cone that
+// holds half of D's projected mass has tan = alpha, the reflected direction
+// turns twice as far: tan(2 atan(alpha)) = 2 alpha / (1 - alpha^2), capped
+// at kMaxConeTan where the cone opens to a half-space.
+constexpr float kMaxConeTan = 16.0f;
+inline float cone_tan(float alpha) {
+  const float d = 1.0f - alpha * alpha;
+  const float t = 2.0f * alpha;
+  return d * kMaxConeTan > t ? t / d : kMaxConeTan;
+}
 // True when a position texel counts as "seen": w > 0 and every channel finite.
 inline bool texel_seen(const float* p) {
   return p[3] > 0.0f && p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f &&
@@ -41,7 +69,6 @@ bool is_reflective(const float* spec);
 
 // Material specular, the book's mapping: Blender Internal hardness 1..511,
 // shininess = hardness / 4 (511 -> 127.75), alpha = clamp(shininess / 127.75, 0, 1).
-constexpr float kMaxShininess = 127.75f;
 inline float shininess_from_hardness(float hardness) { return hardness / 4.0f; }
 float shininess_to_alpha(float shininess);
 
@@ -77,9 +104,38 @@ class Backend {
   // follow it). Only pixels inside `region` (x0, y0, x1, y1, half-open) are
   // blurred; the rest are copied from src. region == nullptr: the whole image.
   virtual Image box_blur(const Image& src, const BlurOptions& opt, const int* region) = 0;
-  // mix(color, blurred, roughness) * specular amount; 0 where the amount <= 0.
-  virtual Image reflection(const Image& color, const Image& blurred, const Image& specular) = 0;
-  virtual Image combine(const Image& base, const Image& reflection, Combine mode) = 0;
+  // rgb weight of each pixel's reflection (docs/look-core.md): F0 * A + B per
+  // channel, F0 = specular rgb, (A, B) the split-sum table (glint/brdf.h) at
+  // N.V (the camera's real view ray, camera_eye()) and ggx_alpha_of(specular);
+  // alpha = mean of the rgb. (0, 0, 0, 0) where a pixel is not seen, not
+  // reflective or has no usable normal.
+  virtual Image specular_weight(const Image& position, const Image& normal, const Image& specular,
+                                const Mat4& projection) = 0;
+  // The reflection colour blurred by each pixel's GGX cone: a footprint of
+  // 2 * ray length in pixels (|uv - pixel centre|) * cone_tan(alpha), read
+  // trilinearly from a 2x2 box mip chain of `color` (all four channels).
+  // Pixels with alpha 0, zero visibility or no reflection keep their colour.
+  virtual Image cone_blur(const Image& color, const Image& uv, const Image& specular) = 0;
+  // mix(color, *blurred, roughness) (just `color` when blurred is null: a cone
+  // blur already holds the roughness) times the weight: weight->rgb on the
+  // colour and weight->a on the alpha, or the seed's specular amount on all
+  // four when weight is null. 0 where the pixel does not reflect.
+  virtual Image reflection(const Image& color, const Image* blurred, const Image& specular,
+                           const Image* weight) = 0;
+  Image reflection(const Image& color, const Image& blurred, const Image& specular) {
+    return reflection(color, &blurred, specular, nullptr);
+  }
+  // The reflection over the base (Combine). With specular_base (the engine's
+  // own specular contribution, "over" only), the part of it that the
+  // reflection stands in for is taken out first:
+  //   max(base - specular_base * coverage.a, 0) + reflection.rgb,
+  // coverage being the (blurred) reflection colour, whose alpha is the share
+  // of the lobe the trace found.
+  virtual Image combine(const Image& base, const Image& reflection, Combine mode,
+                        const Image* specular_base, const Image* coverage) = 0;
+  Image combine(const Image& base, const Image& reflection, Combine mode) {
+    return combine(base, reflection, mode, nullptr, nullptr);
+  }
   // G-buffers (position, normal, specular) from view-space triangles; see raster.h.
   virtual GBufferImages rasterize(const RasterInputs& in) = 0;
 };
@@ -92,5 +148,10 @@ void require_image(const Image& img, const char* name);
 void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name);
 // Everything Backend::trace checks before it runs: buffer sizes, options, projection.
 void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt);
+// The checks every backend's reflection / combine make before they run.
+void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,
+                               const Image* weight);
+void require_combine_inputs(const Image& base, const Image& reflection, Combine mode,
+                            const Image* specular_base, const Image* coverage);
 
 }  // namespace glint

@@ -6,6 +6,7 @@
 #include "glint/errors.h"
 #include "glint/marches.h"
 #include "glint/stages.h"
+#include "look.h"
 #include "march.h"
 #include "parallel.h"
 #include "raster.h"
@@ -210,35 +211,70 @@ class CpuBackend final : public Backend {
     return out;
   }
 
-  Image reflection(const Image& color, const Image& blurred, const Image& specular) override {
+  Image specular_weight(const Image& position, const Image& normal, const Image& specular,
+                        const Mat4& projection) override {
+    require_image(position, "position");
+    require_same_size(position, "position", normal, "normal");
+    require_same_size(position, "position", specular, "specular");
+    validate_projection(projection);
+    return cpu::specular_weight(position, normal, specular, projection, threads_);
+  }
+
+  Image cone_blur(const Image& color, const Image& uv, const Image& specular) override {
     require_image(color, "reflection_color");
-    require_same_size(color, "reflection_color", blurred, "reflection_blur");
+    require_same_size(color, "reflection_color", uv, "uv");
     require_same_size(color, "reflection_color", specular, "specular");
+    return cpu::cone_blur(color, uv, specular, threads_);
+  }
+
+  Image reflection(const Image& color, const Image* blurred, const Image& specular,
+                   const Image* weight) override {
+    require_reflection_inputs(color, blurred, specular, weight);
     Image out(color.width, color.height);
     parallel_rows(0, out.height, threads_, [&](int y) {
       for (int x = 0; x < out.width; ++x) {
         const float* s = specular.px(x, y);
         if (!is_reflective(s)) continue;
-        const float amount = specular_amount(s);
-        const float roughness = roughness_of(s);
         const float* c = color.px(x, y);
-        const float* b = blurred.px(x, y);
         float* o = out.px(x, y);
-        for (int k = 0; k < 4; ++k) o[k] = (c[k] * (1.0f - roughness) + b[k] * roughness) * amount;
+        float mixed[4];
+        if (blurred) {
+          const float roughness = roughness_of(s);
+          const float* b = blurred->px(x, y);
+          for (int k = 0; k < 4; ++k) mixed[k] = c[k] * (1.0f - roughness) + b[k] * roughness;
+        } else {
+          std::copy(c, c + 4, mixed);
+        }
+        if (weight) {
+          const float* wt = weight->px(x, y);
+          for (int k = 0; k < 4; ++k) o[k] = mixed[k] * wt[k];
+        } else {
+          const float amount = specular_amount(s);
+          for (int k = 0; k < 4; ++k) o[k] = mixed[k] * amount;
+        }
       }
     });
     return out;
   }
 
-  Image combine(const Image& base, const Image& reflection, Combine mode) override {
-    require_image(base, "color");
-    require_same_size(base, "color", reflection, "reflection");
+  Image combine(const Image& base, const Image& reflection, Combine mode, const Image* specular_base,
+                const Image* coverage) override {
+    require_combine_inputs(base, reflection, mode, specular_base, coverage);
     Image out(base.width, base.height);
     parallel_rows(0, out.height, threads_, [&](int y) {
       for (int x = 0; x < out.width; ++x) {
         const float* b = base.px(x, y);
         const float* r = reflection.px(x, y);
         float* o = out.px(x, y);
+        if (specular_base) {
+          // Replace, do not add: the engine's specular goes where the trace
+          // found what it stood in for.
+          const float* sb = specular_base->px(x, y);
+          const float cov = clamp01(coverage->px(x, y)[3]);
+          for (int k = 0; k < 3; ++k) o[k] = std::max(b[k] - sb[k] * cov, 0.0f) + r[k];
+          o[3] = b[3];
+          continue;
+        }
         const float a = clamp01(r[3]);
         for (int k = 0; k < 3; ++k) {
           o[k] = mode == Combine::Over ? b[k] * (1.0f - a) + r[k] : b[k] * (1.0f - a) + r[k] * a;
@@ -266,6 +302,26 @@ float shininess_to_alpha(float shininess) {
   const float a = shininess / kMaxShininess;
   if (!(a > 0.0f)) return 0.0f;
   return a > 1.0f ? 1.0f : a;
+}
+
+void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,
+                               const Image* weight) {
+  require_image(color, "reflection_color");
+  if (blurred) require_same_size(color, "reflection_color", *blurred, "reflection_blur");
+  require_same_size(color, "reflection_color", specular, "specular");
+  if (weight) require_same_size(color, "reflection_color", *weight, "specular_weight");
+}
+
+void require_combine_inputs(const Image& base, const Image& reflection, Combine mode,
+                            const Image* specular_base, const Image* coverage) {
+  require_image(base, "color");
+  require_same_size(base, "color", reflection, "reflection");
+  if (!specular_base) return;
+  if (mode != Combine::Over)
+    throw InvalidArgument("specular_base", "is replaced only with combine=\"over\"");
+  require_same_size(base, "color", *specular_base, "specular_base");
+  if (!coverage) throw InvalidArgument("coverage", "is needed with specular_base");
+  require_same_size(base, "color", *coverage, "coverage");
 }
 
 std::unique_ptr<Backend> make_cpu_backend(int threads) {

@@ -76,20 +76,39 @@ class GlBackend final : public Backend {
     return out;
   }
 
-  Image reflection(const Image& color, const Image& blurred, const Image& specular) override {
-    require_image(color, "reflection_color");
-    require_same_size(color, "reflection_color", blurred, "reflection_blur");
-    require_same_size(color, "reflection_color", specular, "specular");
+  Image specular_weight(const Image& position, const Image& normal, const Image& specular,
+                        const Mat4& projection) override {
+    require_image(position, "position");
+    require_same_size(position, "position", normal, "normal");
+    require_same_size(position, "position", specular, "specular");
+    validate_projection(projection);
     Image out;
-    worker_.run([&](GlState& s) { out = s.reflection(color, blurred, specular); });
+    worker_.run([&](GlState& s) { out = s.specular_weight(position, normal, specular, projection); });
     return out;
   }
 
-  Image combine(const Image& base, const Image& refl, Combine mode) override {
-    require_image(base, "color");
-    require_same_size(base, "color", refl, "reflection");
+  Image cone_blur(const Image& color, const Image& uv, const Image& specular) override {
+    require_image(color, "reflection_color");
+    require_same_size(color, "reflection_color", uv, "uv");
+    require_same_size(color, "reflection_color", specular, "specular");
     Image out;
-    worker_.run([&](GlState& s) { out = s.combine(base, refl, mode); });
+    worker_.run([&](GlState& s) { out = s.cone_blur(color, uv, specular); });
+    return out;
+  }
+
+  Image reflection(const Image& color, const Image* blurred, const Image& specular,
+                   const Image* weight) override {
+    require_reflection_inputs(color, blurred, specular, weight);
+    Image out;
+    worker_.run([&](GlState& s) { out = s.reflection(color, blurred, specular, weight); });
+    return out;
+  }
+
+  Image combine(const Image& base, const Image& refl, Combine mode, const Image* specular_base,
+                const Image* coverage) override {
+    require_combine_inputs(base, refl, mode, specular_base, coverage);
+    Image out;
+    worker_.run([&](GlState& s) { out = s.combine(base, refl, mode, specular_base, coverage); });
     return out;
   }
 

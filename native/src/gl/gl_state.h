@@ -64,9 +64,20 @@ class GlState {
 
   Image box_blur(const Image& src, const BlurOptions& opt, const int* region);
 
-  Image reflection(const Image& color, const Image& blurred, const Image& specular);
+  // The split-sum table as a kEnvBrdfSize^2 texture, uploaded once.
+  const Texture& env_brdf_texture();
 
-  Image combine(const Image& base, const Image& refl, Combine mode);
+  Image specular_weight(const Image& position, const Image& normal, const Image& specular,
+                        const Mat4& projection);
+
+  // The reflection colour's 2x2 box chain, every level rendered on the GPU
+  // from the one below (as the Hi-Z pyramid is), then one lookup pass.
+  Image cone_blur(const Image& color, const Image& uv, const Image& specular);
+
+  Image reflection(const Image& color, const Image* blurred, const Image& specular, const Image* weight);
+
+  Image combine(const Image& base, const Image& refl, Combine mode, const Image* specular_base,
+                const Image* coverage);
 
   GBufferImages rasterize(const RasterInputs& in);
 
@@ -155,6 +166,8 @@ class GlState {
     int w = 0, h = 0, levels = 0;
   };
   Pyramid pyramid_;
+  Pyramid cone_chain_;  // RGBA32F, every level down to 1x1
+  Texture env_brdf_;
   std::map<std::string, GLuint> programs_;
 };
 

@@ -165,27 +165,41 @@ Image GlState::box_blur(const Image& src, const BlurOptions& opt, const int* reg
   return draw_and_read(w, h, "box_blur (vertical pass)", 3);
 }
 
-Image GlState::reflection(const Image& color, const Image& blurred, const Image& specular) {
-  const Texture& c = upload(kIn0, color, "reflection", 4);
-  const Texture& b = upload(kIn1, blurred, "reflection", 4);
-  const Texture& s = upload(kIn2, specular, "reflection", 4);
+Image GlState::reflection(const Image& color, const Image* blurred, const Image& specular,
+                          const Image* weight) {
+  const int textures = 3 + (blurred ? 1 : 0) + (weight ? 1 : 0);
+  const Texture& c = upload(kIn0, color, "reflection", textures);
+  const Texture& s = upload(kIn2, specular, "reflection", textures);
+  // An unused sampler still needs a complete texture bound: the colour stands in.
+  const Texture& b = blurred ? upload(kIn1, *blurred, "reflection", textures) : c;
+  const Texture& wt = weight ? upload(kAux, *weight, "reflection", textures) : c;
   const GLuint prog = program("reflection.frag");
   gl_.UseProgram(prog);
   bind(prog, "u_color", 0, c, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(prog, "u_blurred", 1, b, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(prog, "u_specular", 2, s, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  return draw_and_read(color.width, color.height, "reflection", 4);
+  bind(prog, "u_weight", 3, wt, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.Uniform1i(loc(prog, "u_has_blurred"), blurred ? 1 : 0);
+  gl_.Uniform1i(loc(prog, "u_has_weight"), weight ? 1 : 0);
+  return draw_and_read(color.width, color.height, "reflection", textures);
 }
 
-Image GlState::combine(const Image& base, const Image& refl, Combine mode) {
-  const Texture& b = upload(kIn0, base, "combine", 3);
-  const Texture& r = upload(kIn1, refl, "combine", 3);
+Image GlState::combine(const Image& base, const Image& refl, Combine mode, const Image* specular_base,
+                       const Image* coverage) {
+  const int textures = specular_base ? 5 : 3;
+  const Texture& b = upload(kIn0, base, "combine", textures);
+  const Texture& r = upload(kIn1, refl, "combine", textures);
+  const Texture& sb = specular_base ? upload(kIn2, *specular_base, "combine", textures) : b;
+  const Texture& cov = specular_base ? upload(kAux, *coverage, "combine", textures) : b;
   const GLuint prog = program("combine.frag");
   gl_.UseProgram(prog);
   bind(prog, "u_base", 0, b, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(prog, "u_reflection", 1, r, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(prog, "u_specular_base", 2, sb, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(prog, "u_coverage", 3, cov, GL_NEAREST, GL_CLAMP_TO_EDGE);
   gl_.Uniform1i(loc(prog, "u_mode"), mode == Combine::Over ? 0 : 1);
-  return draw_and_read(base.width, base.height, "combine", 3);
+  gl_.Uniform1i(loc(prog, "u_has_specular_base"), specular_base ? 1 : 0);
+  return draw_and_read(base.width, base.height, "combine", textures);
 }
 
 }  // namespace glint::gl

@@ -22,6 +22,8 @@ GlState::~GlState() {
   for (auto& kv : programs_) gl_.DeleteProgram(kv.second);
   for (Texture& t : textures_) release(t);
   if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
+  if (cone_chain_.id) gl_.DeleteTextures(1, &cone_chain_.id);
+  release(env_brdf_);
   release_raster();
   gl_.DeleteFramebuffers(1, &fbo_);
   gl_.DeleteVertexArrays(1, &empty_vao_);
