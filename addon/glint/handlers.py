@@ -37,6 +37,9 @@ from .state import STATE, FrameReport, log
 
 _job = {"scene": None, "target": None, "done": False, "skip": None, "ui_notice": None}
 
+# The core already named in the log (once per session, and again if it changes).
+_announced = {"core": None}
+
 # How often the main thread looks for queued work (reports, redraws, repairs).
 TICK_SECONDS = 0.2
 
@@ -71,6 +74,9 @@ def on_render_init(scene, *args):
     STATE.cancel.clear()
     if native.load() is None:
         log(f"reflections are off for this render: {native.error()}")
+    elif _announced.get("core") != native.origin():
+        _announced["core"] = native.origin()
+        log(f"using {native.describe()}")
     try:
         warning = compositor.ensure(scene, allow_changes=_on_main_thread())
     except compositor.SetupIncomplete as exc:

@@ -23,11 +23,17 @@ class GLINT_PT_render(bpy.types.Panel):
         layout.use_property_split = True
         glint = context.scene.glint
         layout.active = glint.enabled
-        if native.load() is None:
+        core = native.load()
+        if core is None:
             box = layout.box()
             box.alert = True
             box.label(text="Native module missing: no reflections", icon="ERROR")
             box.operator("glint.retry_native", icon="FILE_REFRESH")
+        else:
+            # Which of the search order's places won, and what it is (docs/addon.md).
+            col = layout.column(align=True)
+            col.label(text=f"Core {native.version()} from {native.source()}", icon="LINKED")
+            col.label(text=native.origin() or "?")
         layout.prop(glint, "preset")
         if glint.enabled and not context.scene.render.use_compositing:
             layout.label(text="Compositing is off in Post Processing", icon="ERROR")
