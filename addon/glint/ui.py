@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import native
+from . import compositor, native
 from .state import STATE
 
 
@@ -35,8 +35,12 @@ class GLINT_PT_render(bpy.types.Panel):
             col.label(text=f"Core {native.version()} from {native.source()}", icon="LINKED")
             col.label(text=native.origin() or "?")
         layout.prop(glint, "preset")
-        if glint.enabled and not context.scene.render.use_compositing:
-            layout.label(text="Compositing is off in Post Processing", icon="ERROR")
+        if glint.enabled:
+            notice = compositor.turned_on_notice(context.scene)
+            if notice:
+                layout.label(text=f"{notice} for its reflections", icon="INFO")
+            if not context.scene.render.use_compositing:
+                layout.label(text="Compositing is off: Glint turns it on when rendering", icon="INFO")
         last = STATE.last
         if last is not None:
             icon = {"ok": "CHECKMARK", "skipped": "INFO"}.get(last.status, "ERROR")
