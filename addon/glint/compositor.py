@@ -216,22 +216,28 @@ def _group_is_current(group) -> bool:
 
 
 def ensure(scene, allow_changes: bool = True) -> Optional[str]:
-    """Put the group in the scene's compositor (idempotent). Returns a warning or None.
+    """Put the group in the scene's compositor (idempotent). Returns a sentence
+    naming what Glint had to turn on for its reflections to reach the frame (an
+    old file's compositor off, no Composite node, Post Processing > Compositing
+    off), or None when nothing was needed.
 
     Nothing is written when the set-up is already in place, so a render thread
     can call this. With ``allow_changes=False`` a needed structural change (nodes,
     links, the group, its images) raises :class:`SetupIncomplete` instead; values
-    the render needs now (blur size, debug switches, the EXR folder, an old
-    file's muted group node) are still written when they differ."""
+    the render needs now (Post Processing > Compositing, blur size, debug switches,
+    the EXR folder, an old file's muted group node) are still written when they
+    differ: the render copies its settings after ``render_init``."""
     def change(what: str) -> None:
         if not allow_changes:
             raise SetupIncomplete(what)
 
     glint = scene.glint
+    turned_on = []
     if not scene.use_nodes or scene.node_tree is None:
         change("the compositor's nodes are off")
         scene.use_nodes = True
         glint.owns_use_nodes = True
+        turned_on.append("the compositor's nodes (Use Nodes)")
     tree = scene.node_tree
     group = find_group()
     if not _group_is_current(group):
@@ -259,15 +265,17 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
             to_socket = link.to_socket
             tree.links.remove(link)
             tree.links.new(gnode.outputs["Image"], to_socket)
-        if not gnode.outputs["Image"].links:
-            comp = next((n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"), None)
-            if comp is None:
-                comp = tree.nodes.new("CompositorNodeComposite")
-                comp.location = (gnode.location.x + 300, gnode.location.y)
-            tree.links.new(gnode.outputs["Image"], comp.inputs["Image"])
     elif gnode.node_tree != group:
         change("the Glint node uses another node group")
         gnode.node_tree = group
+    # The frame is what the Composite node receives: a tree without one (an old
+    # file's Viewer-only tree) would write the bare render, or refuse to render.
+    if not any(n.bl_idname == "CompositorNodeComposite" for n in tree.nodes):
+        change("the compositor has no Composite node")
+        comp = tree.nodes.new("CompositorNodeComposite")
+        comp.location = (gnode.location.x + 300, gnode.location.y + 200)
+        tree.links.new(gnode.outputs["Image"], comp.inputs["Image"])
+        turned_on.append("a Composite node fed by Glint")
     # The group is never muted: a frame Glint does not handle gets zeroed images
     # instead (clear_images), which the render sees; older versions muted it.
     if gnode.mute:
@@ -277,9 +285,23 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         tree.links.new(rl.outputs["Image"], gnode.inputs["Image"])
     _ensure_exr_node(scene, tree, gnode, change)
     if not scene.render.use_compositing:
-        return ("compositing is off (Output Properties > Post Processing > Compositing): "
-                "reflections cannot be composited")
-    return None
+        # A value, not a structure: set even from the render thread, before the
+        # render reads it. Switching Glint off turns it off again.
+        scene.render.use_compositing = True
+        glint.owns_use_compositing = True
+        turned_on.append("Output Properties > Post Processing > Compositing")
+    if not turned_on:
+        return None
+    return f"turned on {' and '.join(turned_on)} so that its reflections reach the frame"
+
+
+def turned_on_notice(scene) -> Optional[str]:
+    """The panel's note of what Glint switched on in this scene, or None."""
+    glint = scene.glint
+    what = [label for flag, label in ((glint.owns_use_nodes, "the compositor's nodes"),
+                                      (glint.owns_use_compositing, "Post Processing > Compositing"))
+            if flag]
+    return f"Glint turned on {' and '.join(what)}" if what else None
 
 
 def exr_base_path(scene) -> str:
@@ -331,7 +353,9 @@ def remove(scene) -> None:
             tree.nodes.remove(exr)
         if glint.owns_use_nodes and _is_default_tree(tree):
             scene.use_nodes = False
-    glint.owns_use_nodes = False
+    if glint.owns_use_compositing:
+        scene.render.use_compositing = False
+    glint.owns_use_nodes = glint.owns_use_compositing = False
     still_used = any(s.glint.enabled and s != scene for s in bpy.data.scenes)
     if not still_used:
         group = find_group()

@@ -37,6 +37,9 @@ from .state import STATE, FrameReport, log
 
 _job = {"scene": None, "target": None, "done": False, "skip": None, "ui_notice": None}
 
+# The core already named in the log (once per session, and again if it changes).
+_announced = {"core": None}
+
 # How often the main thread looks for queued work (reports, redraws, repairs).
 TICK_SECONDS = 0.2
 
@@ -71,8 +74,11 @@ def on_render_init(scene, *args):
     STATE.cancel.clear()
     if native.load() is None:
         log(f"reflections are off for this render: {native.error()}")
+    elif _announced.get("core") != native.origin():
+        _announced["core"] = native.origin()
+        log(f"using {native.describe()}")
     try:
-        warning = compositor.ensure(scene, allow_changes=_on_main_thread())
+        turned_on = compositor.ensure(scene, allow_changes=_on_main_thread())
     except compositor.SetupIncomplete as exc:
         # New nodes and links are not made from the render thread while the UI
         # may be drawing or evaluating the same trees: the main thread does it.
@@ -83,8 +89,8 @@ def on_render_init(scene, *args):
         traceback.print_exc()
         _skip(scene, f"could not set up the compositor ({type(exc).__name__}: {exc})")
         return
-    if warning:  # compositing is off: nothing Glint makes would reach the frame
-        _skip(scene, warning)
+    if turned_on:  # an old file's compositor was off: say what changed, render with reflections
+        log(f"scene {scene.name!r}: {turned_on}")
 
 
 def _skip(scene, reason: str) -> None:
@@ -222,7 +228,9 @@ def on_load_post(*args):
     for scene in bpy.data.scenes:
         if _enabled(scene):
             try:
-                compositor.ensure(scene)
+                turned_on = compositor.ensure(scene)
+                if turned_on:
+                    log(f"scene {scene.name!r}: {turned_on}")
             except Exception as exc:
                 log(f"could not set up the compositor of scene {scene.name!r}: {exc}")
 

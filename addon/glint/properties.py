@@ -19,10 +19,10 @@ def _on_enabled(self, context):
     from . import compositor
     scene = self.id_data
     if self.enabled:
-        warning = compositor.ensure(scene)
-        if warning:
+        turned_on = compositor.ensure(scene)
+        if turned_on:
             from .state import log
-            log(warning)
+            log(f"scene {scene.name!r}: {turned_on}")
     else:
         compositor.remove(scene)
 
@@ -150,6 +150,9 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
                                description="View layer to reflect (empty: the first one rendered)")
     owns_use_nodes: BoolProperty(default=False, options={"HIDDEN"},
                                  description="Glint switched the compositor on and will switch it off")
+    owns_use_compositing: BoolProperty(default=False, options={"HIDDEN"},
+                                       description="Glint switched Post Processing > Compositing on "
+                                                   "and will switch it off")
 
 
 CLASSES = (GLINT_SceneSettings,)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import native
+from . import compositor, native
 from .logic import measurement
 from .state import STATE
 
@@ -24,14 +24,24 @@ class GLINT_PT_render(bpy.types.Panel):
         layout.use_property_split = True
         glint = context.scene.glint
         layout.active = glint.enabled
-        if native.load() is None:
+        core = native.load()
+        if core is None:
             box = layout.box()
             box.alert = True
             box.label(text="Native module missing: no reflections", icon="ERROR")
             box.operator("glint.retry_native", icon="FILE_REFRESH")
+        else:
+            # Which of the search order's places won, and what it is (docs/addon.md).
+            col = layout.column(align=True)
+            col.label(text=f"Core {native.version()} from {native.source()}", icon="LINKED")
+            col.label(text=native.origin() or "?")
         layout.prop(glint, "preset")
-        if glint.enabled and not context.scene.render.use_compositing:
-            layout.label(text="Compositing is off in Post Processing", icon="ERROR")
+        if glint.enabled:
+            notice = compositor.turned_on_notice(context.scene)
+            if notice:
+                layout.label(text=f"{notice} for its reflections", icon="INFO")
+            if not context.scene.render.use_compositing:
+                layout.label(text="Compositing is off: Glint turns it on when rendering", icon="INFO")
         last = STATE.last
         if last is not None:
             icon = {"ok": "CHECKMARK", "skipped": "INFO"}.get(last.status, "ERROR")

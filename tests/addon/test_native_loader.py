@@ -9,17 +9,42 @@ from glint_addon_helpers import ADDON, build_python_dir, load_standalone
 
 
 @pytest.fixture()
-def native():
+def native(monkeypatch):
     mod = load_standalone("native.py", "glint_native_under_test")
     saved = sys.modules.pop("glint_core", None)
+    # Other tests put the build on sys.path: here sys.path holds no glint_core
+    # unless a test puts one there.
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if not _holds_core(p)])
     mod.reset()
     yield mod
     mod.reset()
+    sys.modules.pop("glint_core", None)
     if saved is not None:
         sys.modules["glint_core"] = saved
 
 
-def test_search_order_bundled_then_env_then_checkout(native, tmp_path):
+def _holds_core(directory):
+    try:
+        return any(n.startswith("glint_core") for n in os.listdir(directory or "."))
+    except OSError:
+        return False
+
+
+FAKE_CORE = """
+__version__ = {version!r}
+def trace(*a, **k): pass
+def rasterize(*a, **k): pass
+def backend_name(*a, **k): return "cpu"
+"""
+
+
+def _fake_core(directory, version="9.8.7"):
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "glint_core.py").write_text(FAKE_CORE.format(version=version))
+    return str(directory)
+
+
+def test_search_order_env_then_bundled_then_checkout(native, tmp_path):
     checkout = tmp_path / "checkout"
     (checkout / "addon" / "glint").mkdir(parents=True)
     addons = tmp_path / "user" / "addons"
@@ -27,10 +52,10 @@ def test_search_order_bundled_then_env_then_checkout(native, tmp_path):
     link = addons / "glint"
     link.symlink_to(checkout / "addon" / "glint")
     dirs = native.candidate_dirs(str(link), {"GLINT_CORE_PATH": f"/a{os.pathsep}/b"})
-    assert [label for label, _ in dirs] == ["add-on native/ folder", "GLINT_CORE_PATH", "GLINT_CORE_PATH",
+    assert [label for label, _ in dirs] == ["GLINT_CORE_PATH", "GLINT_CORE_PATH", "add-on native/ folder",
                                              "checkout build"]
-    assert dirs[0][1] == os.path.join(str(link), "native")
-    assert [d for _, d in dirs[1:3]] == ["/a", "/b"]
+    assert [d for _, d in dirs[0:2]] == ["/a", "/b"]
+    assert dirs[2][1] == os.path.join(str(link), "native")
     assert dirs[3][1] == str(checkout / "build" / "python")
 
 
@@ -50,8 +75,55 @@ def test_missing_module_is_a_clear_error_not_an_exception(native, tmp_path):
     msg = native.error()
     assert "glint_core was not found" in msg
     assert str(empty) in msg and "GLINT_CORE_PATH" in msg and "native" in msg
+    assert "sys.path: not importable from sys.path" in msg
     # cached: a second call does not search again
     assert native.load(str(pkg), {"GLINT_CORE_PATH": str(empty)}) is None
+
+
+def test_importable_module_on_sys_path_is_used(native, tmp_path, monkeypatch):
+    pkg = tmp_path / "glint"
+    pkg.mkdir()
+    site = _fake_core(tmp_path / "site-packages")
+    monkeypatch.syspath_prepend(site)
+    core = native.load(str(pkg), {})
+    assert core is not None, native.error()
+    assert native.source() == "sys.path"
+    assert native.origin() == os.path.join(site, "glint_core.py")
+    assert native.version() == "9.8.7"
+    assert native.describe() == f"glint_core 9.8.7 from sys.path ({os.path.join(site, 'glint_core.py')})"
+
+
+def test_glint_core_path_wins_over_sys_path(native, tmp_path, monkeypatch):
+    # GLINT_CORE_PATH takes only folders holding a compiled module; sys.path has a fake one.
+    d = build_python_dir()
+    if d is None:
+        pytest.skip("no build")
+    pkg = tmp_path / "glint"
+    pkg.mkdir()
+    monkeypatch.syspath_prepend(_fake_core(tmp_path / "site-packages"))
+    core = native.load(str(pkg), {"GLINT_CORE_PATH": d})
+    assert core is not None, native.error()
+    assert native.source() == "GLINT_CORE_PATH" and native.origin().startswith(d)
+    assert native.version() != "9.8.7"
+
+
+def test_already_imported_module_is_reused(native, tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(_fake_core(tmp_path / "elsewhere", version="1.2.3"))
+    import glint_core  # noqa: F401  (as another add-on would have)
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if "elsewhere" not in p])
+    pkg = tmp_path / "glint"
+    pkg.mkdir()
+    assert native.load(str(pkg), {}) is sys.modules["glint_core"]
+    assert native.source() == "already imported" and native.version() == "1.2.3"
+
+
+def test_version_without_dunder_version_is_unknown_not_an_error(native, tmp_path, monkeypatch):
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "glint_core.py").write_text(FAKE_CORE.format(version="x").replace("__version__ = 'x'", ""))
+    monkeypatch.syspath_prepend(str(site))
+    assert native.load(str(tmp_path), {}) is not None
+    assert native.version() == "unknown"
 
 
 def test_broken_module_file_is_reported(native, tmp_path):
@@ -71,6 +143,7 @@ def test_finds_the_build_through_glint_core_path(native, tmp_path):
     core = native.load(str(pkg), {"GLINT_CORE_PATH": d})
     assert core is not None, native.error()
     assert native.origin().startswith(d)
+    assert native.source() == "GLINT_CORE_PATH" and native.version() == core.__version__
     assert all(hasattr(core, name) for name in native.REQUIRED)
 
 

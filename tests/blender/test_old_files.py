@@ -1,0 +1,86 @@
+"""Ticking Glint is enough: files saved with the compositor off (Use Nodes off,
+Post Processing > Compositing off, no Composite node) get their reflections when
+Glint is enabled and the file rendered, and the log and the panel say what Glint
+turned on. The files are made here, from the mirror_floor sample, by blender -b."""
+import os
+
+import numpy as np
+import pytest
+
+from glint_blender_helpers import PANELS, read_exr
+
+pytestmark = pytest.mark.blender
+
+# Run in Blender on the sample (Glint enabled by make_samples.py): switch Glint
+# off (which takes its nodes out), then break the compositor as an old file has it.
+VARIANTS = {
+    "nodes_off": "s.glint.enabled = False; s.use_nodes = False",
+    "compositing_off": "s.glint.enabled = False; s.use_nodes = True; s.render.use_compositing = False",
+    "no_composite_node": (
+        "s.glint.enabled = False; s.use_nodes = True; t = s.node_tree\n"
+        "for n in [n for n in t.nodes if n.bl_idname == 'CompositorNodeComposite']: t.nodes.remove(n)\n"
+        "rl = next(n for n in t.nodes if n.bl_idname == 'CompositorNodeRLayers')\n"
+        "v = t.nodes.get('Viewer') or t.nodes.new('CompositorNodeViewer')\n"
+        "t.links.new(rl.outputs['Image'], v.inputs['Image'])"),
+    # Saved with Glint on, then compositing switched off by hand (load_post and render_init repair it).
+    "enabled_everything_off": "s.use_nodes = False; s.render.use_compositing = False",
+}
+
+SAVE = """
+import bpy
+s = bpy.context.scene
+{code}
+print('SAVED', s.use_nodes, s.render.use_compositing, s.glint.enabled,
+      sorted(n.bl_idname for n in s.node_tree.nodes) if s.node_tree else None)
+bpy.ops.wm.save_as_mainfile(filepath={path!r})
+"""
+
+CONFIG = {"glint": {"backend": "CPU", "enabled": True}}
+
+
+@pytest.fixture(scope="module")
+def old_files(blender, samples, session_dir):
+    out = os.path.join(session_dir, "old_files")
+    os.makedirs(out, exist_ok=True)
+    paths = {}
+    for name, code in VARIANTS.items():
+        path = os.path.join(out, name + ".blend")
+        log = blender.run([samples["mirror_floor"], "--addons", "glint", "--python-expr",
+                           SAVE.format(code=code, path=path)])
+        assert "SAVED" in log and os.path.isfile(path), log[-2000:]
+        paths[name] = path
+    return paths
+
+
+@pytest.fixture(scope="module")
+def reference(blender, samples, session_dir):
+    out = os.path.join(session_dir, "old_files_reference")
+    log = blender.render(samples["mirror_floor"], out, CONFIG)
+    assert "Glint: frame 1: reflections composited" in log
+    return read_exr(os.path.join(out, "frame_0001.exr"))
+
+
+@pytest.mark.parametrize("variant", sorted(VARIANTS))
+def test_enabling_glint_in_an_old_file_gives_reflections(variant, old_files, reference, mirror_off,
+                                                         blender, tmp_path):
+    out = str(tmp_path / "out")
+    log = blender.render(old_files[variant], out, CONFIG)
+    assert "Glint: frame 1: reflections composited" in log, log[-3000:]
+    assert "turned on" in log, log[-3000:]
+    img = read_exr(os.path.join(out, "frame_0001.exr"))
+    off = read_exr(os.path.join(mirror_off[0], "frame_0001.exr"))
+    # The reflections are there: the frame is the sample's with Glint, not the plain one.
+    with_glint = np.abs(reference[..., :3] - off[..., :3]).mean()
+    assert with_glint > 1e-3
+    assert np.abs(img[..., :3] - reference[..., :3]).mean() < 0.05 * with_glint
+
+
+def test_the_panel_says_what_was_turned_on_and_off_restores_it(old_files, blender):
+    code = ("import bpy\ns = bpy.context.scene\ns.glint.enabled = True\n" + PANELS +
+            "\ns.glint.enabled = False\nprint('AFTER', s.use_nodes, s.render.use_compositing)\n")
+    log = blender.run([old_files["compositing_off"], "--addons", "glint", "--python-expr", code])
+    assert "Post Processing > Compositing" in next(l for l in log.splitlines() if l.startswith("Glint: scene"))
+    labels = next(l for l in log.splitlines() if l.startswith("LABELS"))
+    assert "Glint turned on Post Processing > Compositing for its reflections" in labels, labels
+    # Switching Glint off again gives the file its own settings back.
+    assert "AFTER True False" in log, log[-2000:]
