@@ -240,7 +240,7 @@ def time_trace(frame, kw, backend, repeat):
     return uv, statistics.median(times)
 
 
-def sweep(spec, sizes, marches, grid, backends, repeat, back_layer, log=print) -> list:
+def sweep(spec, sizes, marches, grid, backends, repeat, back_layer, log=print, label_backends=()) -> list:
     rows = []
     for width, height in sizes:
         frame = load_frame(spec, width, height)
@@ -256,7 +256,8 @@ def sweep(spec, sizes, marches, grid, backends, repeat, back_layer, log=print) -
             points += [dict(p, back_layer=True) for p in points
                        if glint_core.march_details()[p["march"]]["uses_back_position"]]
         for p in points:
-            for backend in backends:
+            extra = [b for b in label_backends if p.get("preset") and b not in backends]
+            for backend in list(backends) + extra:
                 try:
                     uv, ms = time_trace(frame, p, backend, repeat)
                 except glint_core.BackendUnavailable as exc:
@@ -278,6 +279,23 @@ def sweep(spec, sizes, marches, grid, backends, repeat, back_layer, log=print) -
                     f"steps={p['steps']:<3} thick={p['thickness']:<6.3g} back={row['back_layer']} "
                     f"{row['preset']:8s} {ms:8.2f} ms  P={m['precision']:.4f} R={m['recall']:.4f}")
     return rows
+
+
+def read_csv(path) -> list:
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        for k in ("ms", "precision", "recall", "resolution", "thickness", "max_distance"):
+            r[k] = float(r[k])
+        for k in ("width", "height", "steps", "back_layer"):
+            r[k] = int(r[k])
+    return rows
+
+
+def write_plots(out_dir, label, rows):
+    for w, h in sorted({(r["width"], r["height"]) for r in rows}):
+        plot(os.path.join(out_dir, f"{label}_{w}x{h}.png"),
+             [r for r in rows if (r["width"], r["height"]) == (w, h)], f"{label} {w}x{h}")
 
 
 def write_csv(path, rows):
@@ -310,20 +328,45 @@ def plot(path, rows, title):
             front = pareto(t, s)
             order = np.argsort(t[front])
             ax.step(t[front][order], s[front][order], where="post", c="k", lw=1.0, alpha=0.7)
-            for r, ti, si in zip(sel, t, s):
-                if r["preset"]:
-                    ax.annotate(f"{r['preset']}{'+back' if r['back_layer'] else ''} ({backend})", (ti, si),
-                                fontsize=7, xytext=(4, -10), textcoords="offset points")
-                    ax.scatter([ti], [si], s=50, facecolors="none", edgecolors="k")
+            for k, (r, ti, si) in enumerate((r, ti, si) for r, ti, si in zip(sel, t, s) if r["preset"]):
+                ax.scatter([ti], [si], s=50, facecolors="none", edgecolors="k")
+                if backend == backends[0]:  # one label per point: the first backend's
+                    ax.annotate(f"{r['preset']}{'+back' if r['back_layer'] else ''}", (ti, si), fontsize=7,
+                                xytext=(4, -9 - 8 * (k % 3)), textcoords="offset points")
         ax.set_xscale("log")
         ax.set_xlabel("trace time, ms (median)")
         ax.set_ylabel(f"{metric} within 1.5 px of the exact hit")
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, loc="lower right")
+    axes[0].legend(fontsize=7, loc="best")
     fig.suptitle(f"{title}: Pareto front (black), presets circled")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+LABELS = ("seed-defaults", "linear-book", "draft", "balanced", "high", "exact")
+
+
+def summary_table(paths) -> str:
+    """Markdown: each labelled point of each CSV (presets and the two references),
+    CPU time, GL time as a ratio to the CPU's, precision, recall, median pixel error."""
+    lines = ["| scene | size | point | CPU ms | GL / CPU | precision | recall | median px | false |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for path in paths:
+        with open(path) as f:
+            rows = list(csv.DictReader(f))
+        for label in LABELS:
+            for back in ("0", "1"):
+                sel = {r["backend"]: r for r in rows if r["preset"] == label and r["back_layer"] == back}
+                if "cpu" not in sel:
+                    continue
+                c = sel["cpu"]
+                ratio = f"{float(sel['gl']['ms']) / float(c['ms']):.2f}" if "gl" in sel else "-"
+                name = label + (" + back layer" if back == "1" else "")
+                lines.append(f"| {c['scene']} | {c['width']}x{c['height']} | {name} | {float(c['ms']):.0f} | {ratio} "
+                             f"| {float(c['precision']):.3f} | {float(c['recall']):.3f} | "
+                             f"{float(c['median_px']):.2f} | {c['false_reflections']} |")
+    return "\n".join(lines)
 
 
 def parse_sizes(text):
@@ -340,7 +383,10 @@ def floats(text):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scene", action="append", required=True)
+    ap.add_argument("--scene", action="append", default=[])
+    ap.add_argument("--table", nargs="+", metavar="CSV",
+                    help="print the markdown table of the labelled points of these CSVs, and stop")
+    ap.add_argument("--replot", nargs="+", metavar="CSV", help="redraw the plots of these CSVs beside them, and stop")
     ap.add_argument("--sizes", type=parse_sizes, default=parse_sizes("960x540"))
     ap.add_argument("--march", default=",".join(m for m, d in glint_core.march_details().items()
                                                  if not d["needs_mesh"]),
@@ -350,11 +396,22 @@ def main(argv=None):
     ap.add_argument("--thickness", type=floats, default=DEFAULT_GRID["thickness"])
     ap.add_argument("--max-distance", type=floats, default=DEFAULT_GRID["max_distance"])
     ap.add_argument("--backends", default="cpu")
+    ap.add_argument("--label-backends", default="",
+                    help="also time the presets and reference points on these backends (e.g. gl)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--no-back-layer", action="store_true", help="do not add back-layer points")
     ap.add_argument("--out", default=os.path.join(root, "docs", "sweeps"))
     ap.add_argument("--no-plot", action="store_true")
     args = ap.parse_args(argv)
+    if args.table:
+        print(summary_table(args.table))
+        return
+    if args.replot:
+        for path in args.replot:
+            write_plots(os.path.dirname(path) or ".", os.path.splitext(os.path.basename(path))[0], read_csv(path))
+        return
+    if not args.scene:
+        ap.error("--scene is required (or --table)")
     marches = [m for m in args.march.split(",") if m]
     for m in marches:
         if m not in glint_core.marches():
@@ -365,16 +422,14 @@ def main(argv=None):
     for spec in args.scene:
         try:
             rows = sweep(spec, args.sizes, marches, grid, args.backends.split(","), args.repeat,
-                         not args.no_back_layer)
+                         not args.no_back_layer, label_backends=[b for b in args.label_backends.split(",") if b])
         except SkipScene as exc:
             print(f"sweep: {spec}: skipped, {exc}")
             continue
         label = scene_label(spec)
         write_csv(os.path.join(args.out, f"{label}.csv"), rows)
         if not args.no_plot:
-            for w, h in sorted({(r["width"], r["height"]) for r in rows}):
-                plot(os.path.join(args.out, f"{label}_{w}x{h}.png"),
-                     [r for r in rows if (r["width"], r["height"]) == (w, h)], f"{label} {w}x{h}")
+            write_plots(args.out, label, rows)
         print(f"sweep: wrote {os.path.join(args.out, label)}.csv ({len(rows)} rows)")
 
 

@@ -110,6 +110,8 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         if back_layer:
             kwargs["back_position"] = gbuf["back_position"]
         kwargs.update(mesh_kwargs(core, exp, kwargs["march"]))
+        if used == "gl" and not core.march_details()[kwargs["march"]]["gl"]:
+            log(f"march '{kwargs['march']}' has no OpenGL form: it traces on the CPU")
         n_trace = compositing.trace_normals(normal, position, specular)
         proj32 = cam.projection.astype(np.float32)
         with timings.measure("trace"):
