@@ -359,3 +359,41 @@ def test_seed_look_is_bit_for_bit_the_pipeline_before_it(kind, combine):
                               **SEED_LOOK)
     for layer in ("uv", "reflection_color", "reflection_blur", "reflection", "combined"):
         assert out[layer].tobytes() == f[f"{kind}_{combine}_{layer}"].tobytes(), layer
+
+
+# --- glint-exr ---------------------------------------------------------------------------
+
+
+def test_glint_exr_takes_the_look_options(tmp_path):
+    import os
+    import subprocess
+
+    build = Path(os.environ.get("GLINT_BUILD_DIR", Path(__file__).resolve().parents[2] / "build"))
+    tool = build / "bin" / "glint-exr"
+    if not tool.is_file():
+        pytest.skip(f"glint-exr not built: {tool}")
+    gb = floor_scene(alpha=0.5)
+    rng = np.random.default_rng(8)
+    layers = {k: gb[k] for k in ("position", "normal", "specular", "color")}
+    layers["specular_base"] = np.concatenate(
+        [gb["color"][..., :3] * rng.uniform(0, 0.3, (H, W, 1)), np.ones((H, W, 1))], axis=2).astype(np.float32)
+    src = tmp_path / "in.exr"
+    glint_core.write_exr(src, layers, projection=gb["projection"])
+
+    def cli(*args):
+        return subprocess.run([str(tool), *map(str, args)], capture_output=True, text=True, timeout=120)
+
+    for flags, kw in (([], {}), (["--weighting", "seed", "--blur", "box", "--combine", "seed"],
+                                 dict(weighting="seed", blur="box", combine="seed"))):
+        dst = tmp_path / "out.exr"
+        proc = cli(*flags, src, dst)
+        assert proc.returncode == 0, proc.stderr
+        out, header = glint_core.read_exr(dst)
+        want = run(gb, **kw, **({} if kw else dict(specular_base=layers["specular_base"][..., :3].copy())))
+        for name in glint_core.LAYERS:
+            np.testing.assert_allclose(out[name], want[name], atol=1e-6, err_msg=name)
+        look = kw or dict(weighting="physical", blur="cone")
+        for k, v in look.items():
+            assert f"{k}={v}" in header["options"]
+    proc = cli("--weighting", "pbr", src, tmp_path / "x.exr")
+    assert proc.returncode != 0 and "--weighting" in proc.stderr and "physical" in proc.stderr
