@@ -33,8 +33,8 @@ const char* const kUsage = R"(usage: glint-exr [options] INPUT.exr [OUTPUT.exr]
 
 Runs Glint's screen-space reflections on the position, normal, specular and
 colour layers of a multilayer EXR and writes every input layer plus the
-pipeline's layers (uv, reflection_color, reflection_blur, reflection,
-combined) to OUTPUT.exr. Layers are read as glint_core.read_exr does: layer
+pipeline's layers (uv, reflection_color, reflection_blur, specular_weight,
+reflection, combined) to OUTPUT.exr. Layers are read as glint_core.read_exr does: layer
 "position" is channels position.R/G/B/A (or .X/Y/Z/W), Blender's
 "ViewLayer.Pass.R" is layer "ViewLayer.Pass". Row 0 is the bottom row.
 
@@ -45,6 +45,9 @@ Input layers:
   --color-layer NAME      base colour (linear)                   [color]
   --back-position-layer NAME  optional: the surface behind each pixel's
                           own, for marches that use true thickness [back_position]
+  --specular-base-layer NAME  optional: the renderer's own specular (rgb),
+                          replaced where a reflection is found (--combine
+                          over only)                             [specular_base]
 
 Projection (default: the input's glintProjection header attribute):
   --projection "P00 P01 ... P33"      16 numbers, rows as printed:
@@ -59,9 +62,12 @@ Pipeline:
   --thickness F           hit depth tolerance, view units        [0.5]
   --march NAME            one of the marches below               [seed]
   --preset NAME           a preset's trace options (below); flags after it override
+  --weighting physical|seed  F0 * A + B split-sum, or mean F0  [physical]
+  --blur cone|box         ray length x GGX cone, or a fixed box  [cone]
   --blur-size N           box half-width in taps, 0 = no blur    [8]
   --blur-separation F     pixels between taps, >= 1              [1]
   --combine over|seed                                            [over]
+  The seed's look: --weighting seed --blur box --combine seed.
   --backend cpu|gl|auto                                          [cpu]
   --threads N             CPU threads, 0 = all                   [0]
 
@@ -102,8 +108,10 @@ struct UsageError {
 struct Args {
   std::string input, output, png;
   std::string position_layer = "position", normal_layer = "normal", specular_layer = "specular",
-              color_layer = "color", back_layer = "back_position";
+              color_layer = "color", back_layer = "back_position",
+              specular_base_layer = "specular_base";
   bool back_layer_given = false;  // --back-position-layer named it: it must be there
+  bool specular_base_given = false;
   std::optional<glint::Mat4> projection;  // from --projection
   std::optional<std::vector<double>> perspective, orthographic;
   glint::PipelineOptions opt;
@@ -184,6 +192,10 @@ Args parse_args(int argc, char** argv, bool& help) {
       a.back_layer_given = true;
     }
     else if (flag == "--color-layer") a.color_layer = next();
+    else if (flag == "--specular-base-layer") {
+      a.specular_base_layer = next();
+      a.specular_base_given = true;
+    }
     else if (flag == "--projection") {
       const auto v = parse_list(flag, next(), 16);
       glint::Mat4 m;
@@ -213,7 +225,15 @@ Args parse_args(int argc, char** argv, bool& help) {
         throw UsageError{flag + " " + v + ": that march needs the scene's triangles, which an EXR does not hold"};
     } else if (flag == "--blur-size") a.opt.blur.size = parse_int(flag, next());
     else if (flag == "--blur-separation") a.opt.blur.separation = static_cast<float>(parse_double(flag, next()));
-    else if (flag == "--combine") {
+    else if (flag == "--weighting" || flag == "--blur") {
+      const std::string v = next();
+      try {
+        if (flag == "--weighting") a.opt.weighting = glint::parse_weighting(v);
+        else a.opt.blur_mode = glint::parse_blur_mode(v);
+      } catch (const glint::InvalidArgument& e) {
+        throw UsageError{flag + ": " + std::string(e.what()).substr(std::string(e.what()).find(": ") + 2)};
+      }
+    } else if (flag == "--combine") {
       const std::string v = next();
       if (v != "over" && v != "seed") throw UsageError{flag + ": expected over or seed, got \"" + v + "\""};
       a.opt.combine = glint::parse_combine(v);
@@ -309,6 +329,10 @@ int run(const Args& a) {
   // The back-face layer is optional: used where the file has it.
   if (a.back_layer_given || in.layers.count(a.back_layer))
     pin.back_position = layer(in, a.input, a.back_layer, "--back-position-layer");
+  // Found by name it is used where it can be ("over"); named by the flag it must be.
+  if (a.specular_base_given ||
+      (in.layers.count(a.specular_base_layer) && a.opt.combine == glint::Combine::Over))
+    pin.specular_base = layer(in, a.input, a.specular_base_layer, "--specular-base-layer");
   const int w = pin.position.width, h = pin.position.height;
   const double aspect = static_cast<double>(w) / h;
 
@@ -358,6 +382,8 @@ int run(const Args& a) {
                  " steps=" + std::to_string(o.trace.steps) +
                  " thickness=" + number(o.trace.thickness) +
                  " march=" + glint::to_string(o.trace.march) +
+                 " weighting=" + glint::to_string(o.weighting) +
+                 " blur=" + glint::to_string(o.blur_mode) +
                  " blur_size=" + std::to_string(o.blur.size) +
                  " blur_separation=" + number(o.blur.separation) +
                  " combine=" + glint::to_string(o.combine) + " backend=" + backend->name();

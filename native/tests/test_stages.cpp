@@ -15,6 +15,7 @@
 
 #include "analytic_scene.h"
 #include "parallel.h"
+#include "glint/errors.h"
 #include "glint/pipeline.h"
 
 using namespace glint;
@@ -217,4 +218,58 @@ TEST(ParallelRows, EveryRowRunsOnceWhenThreadsCannotBeStarted) {
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << WTERMSIG(status);
   EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+// The physical weight of a mirror (shininess 1) seen head on is its F0
+// (Schlick at N.V = 1: A = 1, B = 0), and at N.V -> 0 it tends to 1 (B = 1).
+TEST(SpecularWeight, MirrorIsSchlickAtBothEnds) {
+  const Mat4 proj = orthographic(2, 2, 0.1, 100);
+  Image pos(2, 1), nrm(2, 1), spec(2, 1);
+  for (int x = 0; x < 2; ++x) {
+    float* p = pos.px(x, 0);
+    p[2] = -5.0f;
+    p[3] = 1.0f;
+    float* s = spec.px(x, 0);
+    s[0] = 0.04f, s[1] = 0.5f, s[2] = 1.0f, s[3] = 1.0f;
+  }
+  nrm.px(0, 0)[2] = 1.0f;  // facing the camera
+  nrm.px(1, 0)[0] = 1.0f;  // edge on
+  Image w = make_cpu_backend(1)->specular_weight(pos, nrm, spec, proj);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(w.px(0, 0)[c], spec.px(0, 0)[c], 1e-3) << c;
+    EXPECT_NEAR(w.px(1, 0)[c], 1.0f, 2e-3) << c;
+  }
+  EXPECT_NEAR(w.px(0, 0)[3], (0.04f + 0.5f + 1.0f) / 3.0f, 1e-3);
+}
+
+// A constant image stays constant under any footprint; a pixel whose hit is
+// itself (ray length 0) keeps its colour exactly.
+TEST(ConeBlur, ConstantStaysAndContactIsSharp) {
+  const int w = 37, h = 21;
+  Image col(w, h), uv(w, h), spec(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float* c = col.px(x, y);
+      c[0] = 0.25f, c[1] = 0.5f, c[2] = 0.75f, c[3] = 1.0f;
+      float* t = uv.px(x, y);
+      t[0] = (x + 0.5f + 3.0f * (x % 7)) / w;
+      t[1] = (y + 0.5f) / h;
+      t[2] = t[3] = 1.0f;
+      float* s = spec.px(x, y);
+      s[0] = s[1] = s[2] = 0.5f;
+      s[3] = 0.2f;
+    }
+  auto cpu = make_cpu_backend(2);
+  Image out = cpu->cone_blur(col, uv, spec);
+  for (size_t i = 0; i < out.data.size(); ++i) EXPECT_NEAR(out.data[i], col.data[i], 1e-6f);
+  col.px(7, 5)[0] = 9.0f;  // x % 7 == 0: ray length 0
+  out = cpu->cone_blur(col, uv, spec);
+  EXPECT_EQ(out.px(7, 5)[0], 9.0f);
+}
+
+TEST(Options, WeightingAndBlurNamesRoundTrip) {
+  for (Weighting wt : {Weighting::Physical, Weighting::Seed}) EXPECT_EQ(parse_weighting(to_string(wt)), wt);
+  for (BlurMode b : {BlurMode::Cone, BlurMode::Box}) EXPECT_EQ(parse_blur_mode(to_string(b)), b);
+  EXPECT_THROW(parse_weighting("pbr"), InvalidArgument);
+  EXPECT_THROW(parse_blur_mode("gauss"), InvalidArgument);
 }

@@ -93,9 +93,15 @@ Image specular_weight(const Image& position, const Image& normal, const Image& s
 }
 
 Image cone_blur(const Image& color, const Image& uv, const Image& specular, int threads) {
-  std::vector<Image> chain;
-  chain.push_back(color);
-  while (chain.back().width > 1 || chain.back().height > 1) chain.push_back(reduce(chain.back(), threads));
+  // Level 0 is `color` itself; the levels above are built here.
+  std::vector<Image> above;
+  std::vector<const Image*> chain{&color};
+  while (chain.back()->width > 1 || chain.back()->height > 1) {
+    above.push_back(reduce(*chain.back(), threads));
+    chain.clear();
+    chain.push_back(&color);
+    for (const Image& level : above) chain.push_back(&level);
+  }
   const int last = static_cast<int>(chain.size()) - 1;
   const float w = static_cast<float>(color.width), h = static_cast<float>(color.height);
   Image out = color;
@@ -116,8 +122,8 @@ Image cone_blur(const Image& color, const Image& uv, const Image& specular, int 
       const int k1 = std::min(k0 + 1, last);
       const float f = lod - static_cast<float>(k0);
       float c0[4], c1[4];
-      bilinear(chain[k0], cx / w, cy / h, c0);
-      bilinear(chain[k1], cx / w, cy / h, c1);
+      bilinear(*chain[k0], cx / w, cy / h, c0);
+      bilinear(*chain[k1], cx / w, cy / h, c1);
       float* o = out.px(x, y);
       for (int k = 0; k < 4; ++k) o[k] = c0[k] * (1.0f - f) + c1[k] * f;
     }
