@@ -77,14 +77,22 @@ def forget_filled() -> None:
     _filled = None
 
 
-def clear_images() -> None:
+def clear_images(only_mask: bool = False) -> None:
     """Zero the Glint images that hold a frame: with a zero mask the group passes
     the render through unchanged (out = base * 1 + 0), so a frame Glint cannot
     handle composites as if Glint were off. Images are not copied for the render
     (under F12 the node tree is, before ``frame_change_post``: a mute set there
-    is not seen), so what is written here is what the compositor reads."""
+    is not seen), so what is written here is what the compositor reads.
+
+    ``only_mask``: zero the mask alone, which is all the composited frame reads
+    through (every reflection term is multiplied by its amount); the UV and
+    G-buffer images only reach the frame through a debug view or the layers EXR,
+    and stay listed as filled for the next full clear. At 1920x1080 each image is
+    33 MB to write."""
     global _filled
     names = cg.ALL_IMAGES if _filled is None else sorted(_filled)
+    if only_mask:
+        names = [n for n in names if n == cg.IMAGE_MASK]
     for name in names:
         img = bpy.data.images.get(name)
         if img is None:
@@ -94,7 +102,10 @@ def clear_images() -> None:
             continue
         img.pixels.foreach_set(np.zeros(w * h * 4, dtype=np.float32))
         img.update()
-    _filled = set()
+    if not only_mask:
+        _filled = set()
+    elif _filled is not None:
+        _filled.discard(cg.IMAGE_MASK)
 
 
 # ----------------------------------------------------------------------------

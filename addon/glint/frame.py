@@ -93,15 +93,20 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             return report
         requested = settings_logic.backend_name(values["backend"])
         with timings.measure("rasterize"):
-            backend = resolve_backend(core, requested)
+            # Auto takes the CPU where it measured faster, without even making
+            # a GL context (the first costs ~0.2 s per process): docs/addon.md.
+            choice = settings_logic.auto_backend(cam.width * cam.height, report.triangles) \
+                if requested == "auto" else requested
+            backend = resolve_backend(core, choice)
             kwargs = settings_logic.trace_kwargs(values, core.presets())
             back_layer = core.march_details()[kwargs["march"]]["uses_back_position"]
             gbuf, used = _with_backend(core, backend, requested,
                                        lambda b: rasterize(core, exp, b, back_layer))
         progress.check()
         position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-        mask = compositing.mask_image(position, specular)
-        report.reflective_pixels = int(np.count_nonzero(mask[..., 0] > 0))
+        with timings.measure("images"):  # the mask is one of the compositor's images
+            refl = compositing.reflective_mask(position, specular)
+            report.reflective_pixels = int(np.count_nonzero(refl))
         report.backend = used
         if report.reflective_pixels == 0:
             report.status, report.message = "skipped", "no reflective pixel on screen"
@@ -112,15 +117,16 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         kwargs.update(mesh_kwargs(core, exp, kwargs["march"]))
         if used == "gl" and not core.march_details()[kwargs["march"]]["gl"]:
             log(f"march '{kwargs['march']}' has no OpenGL form: it traces on the CPU")
-        n_trace = compositing.trace_normals(normal, position, specular)
         proj32 = cam.projection.astype(np.float32)
         with timings.measure("trace"):
+            n_trace = compositing.trace_normals(normal, position, specular, refl)
             uv, used = _with_backend(core, used, requested,
                                      lambda b: core.trace(position, n_trace, proj32, backend=b, **kwargs))
         report.backend = used
         progress.check()
         with timings.measure("images"):
-            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_MASK: mask}
+            images = {compositing.IMAGE_UV: compositing.uv_image(uv),
+                      compositing.IMAGE_MASK: compositing.mask_image(position, specular, refl)}
             view = values["debug_view"]
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)

@@ -119,3 +119,24 @@ def test_timings_accumulate():
         clock.t += 1.0
     assert t.ms == {"export": 500.0, "trace": 1000.0}
     assert t.total() == 1500.0 and "export 500.0 ms" in t.summary()
+
+
+def test_auto_backend_rule():
+    s = load_logic("settings")
+    # No GPU: GL would be llvmpipe on the same cores, slower at every size measured.
+    assert s.auto_backend(3840 * 2160, 400_000, gpu=False) == "cpu"
+    # A GPU: the CPU up to 960x540 and 100k triangles (both bounds inclusive), GL beyond.
+    assert s.auto_backend(960 * 540, 100_000, gpu=True) == "cpu"
+    assert s.auto_backend(320 * 240, 14, gpu=True) == "cpu"
+    assert s.auto_backend(960 * 540 + 1, 10, gpu=True) == "auto"
+    assert s.auto_backend(320 * 240, 100_001, gpu=True) == "auto"
+    with pytest.raises(ValueError, match="pixels"):
+        s.auto_backend(-1, 0, gpu=True)
+
+
+def test_gpu_device_lookup(tmp_path):
+    s = load_logic("settings")
+    (tmp_path / "renderD128").write_text("")
+    assert s.has_gpu_device((str(tmp_path / "renderD*"),), platform="linux") is True
+    assert s.has_gpu_device((str(tmp_path / "card*"),), platform="linux") is False
+    assert s.has_gpu_device((), platform="darwin") is True

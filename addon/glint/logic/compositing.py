@@ -180,10 +180,17 @@ def switch_states(debug_view: str) -> Dict[str, bool]:
 # Images handed to the compositor
 
 
+# These run on every pixel of every frame (2 M at 1920x1080): one pass per
+# channel over strided views, no reductions along the last axis, no temporaries
+# of the whole [h, w, 4] array that are not handed on.
+
+
 def specular_amount(specular: np.ndarray) -> np.ndarray:
     """The core's specular amount: mean of rgb; non-finite counts as zero."""
     s = np.asarray(specular, dtype=np.float32)
-    amount = (s[..., 0] + s[..., 1] + s[..., 2]) / np.float32(3.0)
+    amount = s[..., 0] + s[..., 1]
+    amount += s[..., 2]
+    amount /= np.float32(3.0)
     amount[~np.isfinite(amount)] = 0.0
     return amount
 
@@ -191,42 +198,59 @@ def specular_amount(specular: np.ndarray) -> np.ndarray:
 def roughness(specular: np.ndarray) -> np.ndarray:
     """1 - clamp(shininess alpha, 0, 1); a non-finite alpha reads as a mirror."""
     a = np.asarray(specular, dtype=np.float32)[..., 3]
-    a = np.where(np.isfinite(a), np.clip(a, 0.0, 1.0), np.float32(1.0))
-    return (np.float32(1.0) - a).astype(np.float32)
+    r = np.float32(1.0) - np.clip(a, 0.0, 1.0)
+    r[~np.isfinite(a)] = 0.0
+    return r.astype(np.float32, copy=False)
 
 
 def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
     """Pixels the core would trace: seen (w = 1, finite) with a positive specular amount."""
     p = np.asarray(position, dtype=np.float32)
-    seen = (p[..., 3] > 0.5) & np.all(np.isfinite(p), axis=-1)
-    return seen & (specular_amount(specular) > 0)
+    # A sum of the four channels is finite exactly when each is (NaN and inf
+    # propagate), short of an overflow past 3e38, which no position reaches.
+    total = p[..., 0] + p[..., 1]
+    total += p[..., 2]
+    total += p[..., 3]
+    seen = p[..., 3] > 0.5
+    seen &= np.isfinite(total)
+    seen &= specular_amount(specular) > 0
+    return seen
 
 
-def mask_image(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
-    """(amount, roughness, 0, 1) where reflective, (0, 0, 0, 1) elsewhere."""
+def mask_image(position: np.ndarray, specular: np.ndarray, refl: np.ndarray = None) -> np.ndarray:
+    """(amount, roughness, 0, 1) where reflective, (0, 0, 0, 1) elsewhere. ``refl``:
+    :func:`reflective_mask`, when the caller has it already."""
     h, w = np.asarray(specular).shape[:2]
+    if refl is None:
+        refl = reflective_mask(position, specular)
     out = np.zeros((h, w, 4), np.float32)
-    refl = reflective_mask(position, specular)
-    out[..., 0] = np.where(refl, specular_amount(specular), 0.0)
-    out[..., 1] = np.where(refl, roughness(specular), 0.0)
+    np.copyto(out[..., 0], specular_amount(specular), where=refl)
+    np.copyto(out[..., 1], roughness(specular), where=refl)
     out[..., 3] = 1.0
     return out
 
 
-def trace_normals(normal: np.ndarray, position: np.ndarray, specular: np.ndarray) -> np.ndarray:
+def trace_normals(normal: np.ndarray, position: np.ndarray, specular: np.ndarray,
+                  refl: np.ndarray = None) -> np.ndarray:
     """Normals with non-reflective pixels zeroed: the core reports (0, 0, 0, 0)
     there without marching, as its pipeline does for pixels it does not trace."""
-    n = np.array(normal, dtype=np.float32, copy=True)
-    n[~reflective_mask(position, specular)] = 0.0
-    return n
+    if refl is None:
+        refl = reflective_mask(position, specular)
+    n = np.asarray(normal, dtype=np.float32)
+    out = np.zeros(n.shape, np.float32)
+    np.copyto(out, n, where=refl[..., None])
+    return out
 
 
-def _box3(a: np.ndarray) -> np.ndarray:
-    """Sum over each pixel's 3x3 neighbourhood (zero outside), separably."""
-    pad = [(1, 1), (1, 1)] + [(0, 0)] * (a.ndim - 2)
-    p = np.pad(a, pad)
-    s = p[:, :-2] + p[:, 1:-1] + p[:, 2:]
-    return s[:-2] + s[1:-1] + s[2:]
+def _dilate3(mask: np.ndarray) -> np.ndarray:
+    """Pixels with a True pixel in their 3x3 neighbourhood, separably."""
+    rows = mask.copy()
+    rows[1:] |= mask[:-1]
+    rows[:-1] |= mask[1:]
+    out = rows.copy()
+    out[:, 1:] |= rows[:, :-1]
+    out[:, :-1] |= rows[:, 1:]
+    return out
 
 
 def fill_missing_uv(uv: np.ndarray, passes: int = 2) -> np.ndarray:
@@ -236,29 +260,30 @@ def fill_missing_uv(uv: np.ndarray, passes: int = 2) -> np.ndarray:
     (EWA) over that footprint. A miss reports uv (0, 0): beside a hit it makes a
     huge derivative and the hit's colour is averaged over a large part of the
     frame. Misses stay misses (vis 0: Map UV returns zero there); only their uv
-    is made continuous. ``passes`` rings of misses around each hit are filled.
+    is made continuous. ``passes`` rings of misses around each hit are filled,
+    each ring from the pixels known before it (the hits, then the earlier rings).
+    Only the ring's pixels are gathered: a frame's rings are a small share of it.
     """
     out = np.array(uv, dtype=np.float32, copy=True)
-    known_full = out[..., 2] > 0
-    rows = np.flatnonzero(known_full.any(axis=1))
-    if rows.size == 0 or known_full.all():
-        return out
-    cols = np.flatnonzero(known_full.any(axis=0))
-    h, w = known_full.shape
-    # Only a band of ``passes`` pixels around the hits can change.
-    y0, y1 = max(rows[0] - passes, 0), min(rows[-1] + passes + 1, h)
-    x0, x1 = max(cols[0] - passes, 0), min(cols[-1] + passes + 1, w)
-    sub = out[y0:y1, x0:x1]
-    known = known_full[y0:y1, x0:x1]
+    known = out[..., 2] > 0
+    h, w = known.shape
     for _ in range(passes):
-        k = known.astype(np.float32)
-        cnt = _box3(k)
-        acc = _box3(sub[..., :2] * k[..., None])
-        fill = ~known & (cnt > 0)
-        if not fill.any():
+        ys, xs = np.nonzero(_dilate3(known) & ~known)
+        if ys.size == 0:
             break
-        sub[..., :2][fill] = acc[fill] / cnt[fill][:, None]
-        known = known | fill
+        acc = np.zeros((ys.size, 2), np.float32)
+        cnt = np.zeros(ys.size, np.float32)
+        for dy in (-1, 0, 1):
+            yy = ys + dy
+            for dx in (-1, 0, 1):
+                xx = xs + dx
+                inside = (yy >= 0) & (yy < h) & (xx >= 0) & (xx < w)
+                yc, xc = np.clip(yy, 0, h - 1), np.clip(xx, 0, w - 1)
+                k = known[yc, xc] & inside
+                acc += np.where(k[:, None], out[yc, xc, :2], np.float32(0.0))
+                cnt += k
+        out[ys, xs, :2] = acc / cnt[:, None]
+        known[ys, xs] = True
     return out
 
 

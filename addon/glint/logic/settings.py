@@ -7,6 +7,8 @@ distance, thickness).
 """
 from __future__ import annotations
 
+import glob
+import sys
 from typing import Dict, List, Mapping, Tuple
 
 # name: (default, min, max, soft_min, soft_max, description)
@@ -24,7 +26,8 @@ PARAMETERS = {
 }
 
 BACKENDS = (
-    ("AUTO", "Auto", "OpenGL when a context can be made, else the CPU"),
+    ("AUTO", "Auto", "The CPU where it is faster (no GPU, or a frame up to 960x540 and 100k "
+                     "triangles), else OpenGL when a context can be made"),
     ("GL", "OpenGL", "Headless OpenGL (EGL); reports an error if it cannot run"),
     ("CPU", "CPU", "The CPU reference backend"),
 )
@@ -111,3 +114,39 @@ def backend_name(enum_value: str) -> str:
     if enum_value not in names:
         raise ValueError(f"backend: expected AUTO, GL or CPU, got {enum_value!r}")
     return names[enum_value]
+
+
+# Auto's rule (docs/addon.md, "Which backend Auto picks"). Measured with
+# bench/frame_bench.py and a core-only sweep side by side, on 2 cores with Mesa's
+# llvmpipe as the only GL: the CPU rasterized and traced faster at every size
+# and triangle count tried (320x240 to 3840x2160, 144 to 400k triangles), and
+# GL's first use in a process costs ~0.2 s more (its context). Without a GPU,
+# GL is llvmpipe on the same cores, so Auto takes the CPU. With one, the CPU is
+# kept up to 960x540 and 100k triangles, where its whole cost (~0.2 s measured)
+# is about GL's fixed cost; beyond, GL, whose throughput a GPU multiplies.
+AUTO_CPU_MAX_PIXELS = 960 * 540
+AUTO_CPU_MAX_TRIANGLES = 100_000
+GPU_DEVICE_PATTERNS = ("/dev/dri/renderD*", "/dev/nvidia[0-9]*")
+
+
+def has_gpu_device(patterns=GPU_DEVICE_PATTERNS, platform: str = None) -> bool:
+    """Whether a GPU could back an EGL context: on Linux a DRM render node or an
+    NVIDIA device; elsewhere assumed (no cheap way to tell)."""
+    platform = sys.platform if platform is None else platform
+    if not platform.startswith("linux"):
+        return True
+    return any(glob.glob(p) for p in patterns)
+
+
+def auto_backend(pixels: int, triangles: int, gpu: bool = None) -> str:
+    """'cpu' or 'auto' (GL if a context can be made) for a frame of ``pixels``
+    and ``triangles``; ``gpu``: :func:`has_gpu_device` (looked up when None)."""
+    if pixels < 0 or triangles < 0:
+        raise ValueError(f"pixels, triangles: expected counts >= 0, got {pixels}, {triangles}")
+    if gpu is None:
+        gpu = has_gpu_device()
+    if not gpu:
+        return "cpu"
+    if pixels <= AUTO_CPU_MAX_PIXELS and triangles <= AUTO_CPU_MAX_TRIANGLES:
+        return "cpu"
+    return "auto"

@@ -1,0 +1,184 @@
+"""What Glint adds to one Eevee frame, stage by stage, next to what Eevee's own SSR adds.
+
+Builds a glossy floor (a dielectric, Principled Specular 0.5, Roughness 0.1) under a
+few coloured objects (a few thousand triangles), then renders the same frame, in one
+Blender process, alternating per round:
+
+  plain   Eevee, Screen Space Reflections off, Glint off
+  ssr     Eevee with its SSR on (half-resolution trace off), Glint off
+  glint   Eevee, SSR off, Glint on (the preset given, backend Auto)
+
+and prints the median of each: Blender's wall time for the render, what SSR and Glint
+add to it (against plain), Glint's stages from its log (export/gather, rasterize,
+trace, images), its render_pre clear, and the compositor's share (what Glint adds
+minus its stages and clear). Usage, from a checkout after building:
+
+  blender -b --factory-startup -noaudio --python bench/frame_bench.py -- \
+      [--size 1920x1080] [--rounds 3] [--samples 8] [--preset BALANCED] [--backend AUTO]
+
+The add-on is registered from this checkout; the core comes from GLINT_CORE_PATH
+(default: <checkout>/build/python).
+"""
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import sys
+import time
+
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+
+def _args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    opts = {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO"}
+    i = 0
+    while i < len(argv):
+        key, value = argv[i].lstrip("-"), argv[i + 1] if i + 1 < len(argv) else None
+        if value is None or key not in opts:
+            raise ValueError(f"{argv[i]}: expected one of --{', --'.join(opts)} with a value")
+        if key == "size":
+            w, h = value.lower().split("x")
+            opts[key] = (int(w), int(h))
+        elif key in ("rounds", "samples"):
+            opts[key] = int(value)
+        else:
+            opts[key] = value.upper()
+        i += 2
+    return opts
+
+
+def _register_addon():
+    os.environ.setdefault("GLINT_CORE_PATH", os.path.join(ROOT, "build", "python"))
+    sys.path.insert(0, os.path.join(ROOT, "addon"))
+    import glint
+    glint.register()
+    return glint
+
+
+def _material(name, colour, roughness, specular=0.5, metallic=0.0):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    p = mat.node_tree.nodes["Principled BSDF"]
+    p.inputs["Base Color"].default_value = (*colour, 1.0)
+    p.inputs["Roughness"].default_value = roughness
+    p.inputs["Metallic"].default_value = metallic
+    p.inputs["Specular"].default_value = specular
+    return mat
+
+
+def build_scene(size, samples):
+    scene = bpy.context.scene
+    for ob in list(scene.objects):
+        bpy.data.objects.remove(ob)
+    r = scene.render
+    r.engine = "BLENDER_EEVEE"
+    r.resolution_x, r.resolution_y = size
+    r.resolution_percentage = 100
+    r.filepath = "/tmp/glint_frame_bench_"
+    scene.eevee.taa_render_samples = samples
+    scene.eevee.use_ssr_halfres = False
+    world = scene.world or bpy.data.worlds.new("World")
+    scene.world = world
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.3, 0.35, 0.45, 1.0)
+    bpy.ops.mesh.primitive_plane_add(size=16.0)
+    bpy.context.object.data.materials.append(_material("Glossy Floor", (0.2, 0.2, 0.22), 0.1))
+    objects = [
+        ("primitive_uv_sphere_add", dict(radius=0.8, location=(0, 0, 0.8), segments=48, ring_count=24),
+         (0.8, 0.05, 0.03)),
+        ("primitive_cube_add", dict(size=1.1, location=(-2.3, 1.0, 0.55)), (0.05, 0.6, 0.08)),
+        ("primitive_cylinder_add", dict(radius=0.5, depth=1.6, location=(2.3, 1.0, 0.8), vertices=48),
+         (0.05, 0.1, 0.8)),
+        ("primitive_torus_add", dict(location=(0.8, 2.6, 0.25), major_radius=0.8, minor_radius=0.25),
+         (0.9, 0.7, 0.05)),
+    ]
+    for op, kwargs, colour in objects:
+        getattr(bpy.ops.mesh, op)(**kwargs)
+        ob = bpy.context.object
+        ob.data.materials.append(_material(ob.name, colour, 0.5, specular=0.0))
+        bpy.ops.object.shade_smooth()
+    bpy.ops.object.light_add(type="SUN", rotation=(math.radians(50), math.radians(10), math.radians(30)))
+    bpy.context.object.data.energy = 3.0
+    bpy.ops.object.camera_add(location=(0.0, -7.5, 2.2), rotation=(math.radians(78), 0.0, 0.0))
+    scene.camera = bpy.context.object
+    dg = bpy.context.evaluated_depsgraph_get()
+    tris = 0
+    for ob in scene.objects:
+        if ob.type == "MESH":
+            me = ob.evaluated_get(dg).to_mesh()
+            me.calc_loop_triangles()
+            tris += len(me.loop_triangles)
+            ob.evaluated_get(dg).to_mesh_clear()
+    return scene, tris
+
+
+def configure(scene, mode, opts):
+    scene.eevee.use_ssr = mode == "ssr"
+    g = scene.glint
+    if mode == "glint":
+        g.preset = opts["preset"]
+        g.backend = opts["backend"]
+        g.enabled = True
+    else:
+        g.enabled = False
+
+
+def main():
+    opts = _args()
+    glint = _register_addon()
+    from glint.state import STATE
+    scene, tris = build_scene(opts["size"], opts["samples"])
+    clear_ms = []
+    from glint import compositor
+    real_clear = compositor.clear_images
+
+    def timed_clear():
+        t0 = time.perf_counter()
+        real_clear()
+        clear_ms.append((time.perf_counter() - t0) * 1e3)
+    compositor.clear_images = timed_clear
+    walls = {"plain": [], "ssr": [], "glint": []}
+    stages = {}
+    backends = set()
+    modes = list(walls)
+    for k in range(opts["rounds"] + 1):  # round 0 warms up (shaders, GL context, caches)
+        for mode in modes[k % 3:] + modes[:k % 3]:
+            configure(scene, mode, opts)
+            t0 = time.perf_counter()
+            bpy.ops.render.render(write_still=False)
+            wall = (time.perf_counter() - t0) * 1e3
+            if k == 0:
+                continue
+            walls[mode].append(wall)
+            if mode == "glint":
+                last = STATE.last
+                if last is None or last.status != "ok":
+                    raise RuntimeError(f"Glint did not run: {last}")
+                backends.add(last.backend)
+                for name, ms in last.timings_ms.items():
+                    stages.setdefault(name, []).append(ms)
+    med = {m: statistics.median(v) for m, v in walls.items()}
+    st = {name: statistics.median(v) for name, v in stages.items()}
+    clear = statistics.median(clear_ms[-opts["rounds"]:])
+    added = med["glint"] - med["plain"]
+    w, h = opts["size"]
+    print(f"\nframe_bench: {w}x{h} Eevee, {opts['samples']} samples, {tris} triangles, "
+          f"preset {opts['preset']}, backend {opts['backend']} -> {'/'.join(sorted(backends))}, "
+          f"medians of {opts['rounds']} rounds")
+    print(f"  render, plain             {med['plain']:8.0f} ms")
+    print(f"  Eevee SSR adds            {med['ssr'] - med['plain']:8.0f} ms")
+    print(f"  Glint adds                {added:8.0f} ms")
+    for name in ("export", "rasterize", "trace", "images"):
+        print(f"    {name:<22}{st.get(name, 0.0):8.1f} ms")
+    print(f"    {'clear (render_pre)':<22}{clear:8.1f} ms")
+    rest = added - sum(st.values()) - clear
+    print(f"    {'compositor and rest':<22}{rest:8.0f} ms")
+    print(f"  Glint's stages in all     {sum(st.values()) + clear:8.1f} ms")
+
+
+main()
