@@ -13,6 +13,14 @@ status=0
 echo "== ctest"
 ctest --test-dir "$GLINT_BUILD_DIR" --output-on-failure -j2 || status=1
 
+# The C++ tests again under AddressSanitizer and UBSan (scripts/test_sanitized.sh;
+# about 3 minutes from scratch on 2 cores, seconds when ccache has the objects).
+# GLINT_SKIP_SANITIZED=1 leaves them out.
+if [[ "${GLINT_SKIP_SANITIZED:-0}" != 1 ]]; then
+  echo "== ctest, sanitized"
+  bash "$root/scripts/test_sanitized.sh" --cpp-only || status=1
+fi
+
 echo "== pytest"
 cd "$root"
 suites=()
