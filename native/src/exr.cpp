@@ -30,6 +30,7 @@
 #include <thread>
 
 #include "glint/errors.h"
+#include "glint/memory.h"
 #include "glint/options.h"
 
 namespace glint {
@@ -129,7 +130,7 @@ void read_projection(const Imf::Header& h, const std::string& path, ExrFile& out
   out.projection = m;
 }
 
-ExrFile read_exr_file(const std::string& path) {
+ExrFile read_exr_file(const std::string& path, double memory_limit_mb) {
   Imf::MultiPartInputFile file(path.c_str());
   const int parts = file.parts();
   if (parts < 1) bad_file(path, "holds no image parts");
@@ -202,6 +203,10 @@ ExrFile read_exr_file(const std::string& path) {
     bad_file(path, "has no R/G/B/A or X/Y/Z/W channels (found " +
                        std::to_string(out.skipped_channels.size()) + " other channels)");
 
+  require_memory(exr_read_bytes(W, H, sources.size()),
+                 "reading " + in_quotes(path) + " (" + std::to_string(sources.size()) + " layers of " +
+                     size_text(display) + ")",
+                 memory_limit_mb);
   // Zero outside the data window ("nothing there"), defaults inside it.
   for (auto& [name, src] : sources) out.layers[name] = Image(static_cast<int>(W), static_cast<int>(H));
 
@@ -263,7 +268,7 @@ ExrFile read_exr_file(const std::string& path) {
 
 }  // namespace
 
-ExrFile read_exr(const std::string& path) {
+ExrFile read_exr(const std::string& path, double memory_limit_mb) {
   if (path.empty()) throw InvalidArgument("path", "expected the name of an EXR file, got \"\"");
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
@@ -281,7 +286,7 @@ ExrFile read_exr(const std::string& path) {
       bad_file(path, "is not an OpenEXR file (bad magic number)");
   }
   try {
-    return read_exr_file(path);
+    return read_exr_file(path, memory_limit_mb);
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
