@@ -3,6 +3,7 @@
 # already installed are not touched, and the build is incremental.
 #   GLINT_BUILD_DIR  build directory (default: <checkout>/build)
 #   GLINT_NO_APT=1   skip the package step (e.g. no root)
+#   GLINT_WITH_FUZZERS=1  also install clang and libFuzzer for fuzz/ (scripts/test.sh sets it)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${GLINT_BUILD_DIR:-$root/build}
@@ -15,6 +16,8 @@ packages=(
   googletest libgtest-dev libbenchmark-dev
   blender xvfb xauth python3-matplotlib
 )
+# Only where the libFuzzer harnesses are built (scripts/fuzz.sh).
+if [[ "${GLINT_WITH_FUZZERS:-0}" == 1 ]]; then packages+=(clang-14 libfuzzer-14-dev); fi
 
 if [[ "${GLINT_NO_APT:-0}" != 1 ]]; then
   missing=()

@@ -147,6 +147,10 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.status, report.message = "skipped", str(exc)
     except core.BackendUnavailable as exc:
         report.status, report.message = "error", f"backend unavailable: {exc}"
+    except getattr(core, "MemoryLimitExceeded", ()) as exc:
+        # Refused from its sizes before anything was allocated: the render goes on
+        # without reflections, and the message says how much and how to raise the limit.
+        report.status, report.message = "error", f"over Glint's memory limit: {exc}"
     except (ValueError, RuntimeError, MemoryError) as exc:
         report.status, report.message = "error", f"{type(exc).__name__}: {exc}"
     report.timings_ms = timings.ms

@@ -18,19 +18,21 @@ std::string path_string(const pyb::handle& path) {
   return pyb::module_::import("os").attr("fsdecode")(path).cast<std::string>();
 }
 
-pyb::tuple py_read_exr(const pyb::handle& path_obj) {
+pyb::tuple py_read_exr(const pyb::handle& path_obj, double memory_limit_mb) {
   const std::string path = path_string(path_obj);
   ExrFile file;
   {
     pyb::gil_scoped_release release;
-    file = read_exr(path);
+    file = read_exr(path, memory_limit_mb);
   }
   pyb::dict layers;
   int width = 0, height = 0;
-  for (const auto& [name, img] : file.layers) {
-    layers[pyb::str(name)] = array_from_image(img);
-    width = img.width;
-    height = img.height;
+  // Each layer is freed once copied, so the copies add one layer, not all.
+  while (!file.layers.empty()) {
+    auto node = file.layers.extract(file.layers.begin());
+    layers[pyb::str(node.key())] = array_from_image(node.mapped());
+    width = node.mapped().width;
+    height = node.mapped().height;
   }
   pyb::dict header;
   header["width"] = width;
@@ -74,14 +76,15 @@ void py_write_exr(const pyb::handle& path_obj, const pyb::handle& layers_obj,
 }  // namespace
 
 void bind_exr(pyb::module_& m) {
-  m.def("read_exr", &py_read_exr, "path"_a,
+  m.def("read_exr", &py_read_exr, "path"_a, pyb::kw_only(), "memory_limit_mb"_a = 0.0,
         "Read a multilayer EXR. Returns (layers, header): layers maps each layer name\n"
         "('position' from position.R/G/B/A or .X/Y/Z/W, 'ViewLayer.Pass' from Blender's\n"
         "names, '' for plain R/G/B/A) to a float32 [H, W, 4] array with row 0 at the\n"
         "BOTTOM; missing R/G/B read 0, a missing A reads 1. header holds width, height,\n"
         "compression, options (the glintOptions string, '' if absent), skipped_channels,\n"
         "and 'projection' (float64 (4, 4), clip = P @ (x, y, z, 1)) when the file has one.\n"
-        "A missing or non-EXR file raises ValueError; a corrupt one RuntimeError.");
+        "A missing or non-EXR file raises ValueError; a corrupt one RuntimeError; one whose\n"
+        "layers would take more than memory_limit_mb (0: the default limit) MemoryLimitExceeded.");
   m.def("write_exr", &py_write_exr, "path"_a, "layers"_a, pyb::kw_only(),
         "projection"_a = pyb::none(), "options"_a = "", "compression"_a = "zip",
         "Write a dict of float32 [H, W, 3 or 4] arrays (row 0 at the bottom, all the same\n"

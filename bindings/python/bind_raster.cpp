@@ -12,6 +12,7 @@
 #include "convert.h"
 #include "glint/backend.h"
 #include "glint/errors.h"
+#include "glint/memory.h"
 #include "glint/raster.h"
 
 namespace glint::py {
@@ -82,7 +83,22 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                        const pyb::handle& projection, int width, int height, const pyb::handle& uvs,
                        const pyb::handle& tangents, const pyb::handle& material_normal_map,
                        const pyb::handle& normal_maps, bool back_layer, const std::string& backend,
-                       int threads) {
+                       int threads, double memory_limit_mb) {
+  // Before any copy: the triangles' copies (positions, normals, index, uvs,
+  // tangents: 4 * (9 + 9 + 1 + 6 + 12) bytes each), the output arrays, and the
+  // backend's own buffers.
+  if (width >= 1 && height >= 1 && width <= kMaxImageSide && height <= kMaxImageSide) {
+    uint64_t tris = 0;
+    if (pyb::isinstance<pyb::array>(positions)) {
+      const auto a = pyb::reinterpret_borrow<pyb::array>(positions);
+      if (a.ndim() >= 1) tris = static_cast<uint64_t>(a.shape(0));
+    }
+    const uint64_t px = uint64_t(width) * uint64_t(height);
+    require_memory(tris * 4 * 37 + px * 16 * (back_layer ? 4 : 3) +
+                       raster_bytes(width, height, tris, back_layer, backend != "cpu"),
+                   "rasterize at " + std::to_string(width) + "x" + std::to_string(height),
+                   memory_limit_mb);
+  }
   // T is the length of positions; the other per-triangle arrays must match it.
   Mesh mesh;
   mesh.positions = float32_values(positions, "positions", {-1, 3, 3}, "(T, 3, 3)");
@@ -136,6 +152,7 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
   const Mat4 proj = projection_from_array(projection);
   RasterInputs in{mesh, table, images, proj, width, height};
   in.back_layer = back_layer;
+  in.memory_limit_mb = memory_limit_mb;
   validate(in);
   auto be = get_backend(backend, threads);
   GBufferImages g;
@@ -158,6 +175,7 @@ void bind_raster(pyb::module_& m) {
         "projection"_a, "width"_a, "height"_a, pyb::kw_only(), "uvs"_a = pyb::none(),
         "tangents"_a = pyb::none(), "material_normal_map"_a = pyb::none(),
         "normal_maps"_a = pyb::tuple(), "back_layer"_a = false, "backend"_a = "cpu", "threads"_a = 0,
+        "memory_limit_mb"_a = 0.0,
         "G-buffers from view-space triangles (Blender camera space, -Z forward).\n"
         "positions, normals: float32 (T, 3, 3); material_index: int32 (T,);\n"
         "materials: (M, 4) = (specular r, g, b, shininess 0..127.75);\n"
@@ -166,7 +184,8 @@ void bind_raster(pyb::module_& m) {
         "Returns dict(position, normal, specular) of float32 (height, width, 4), plus\n"
         "back_position with back_layer=True: the nearest back-facing surface behind each\n"
         "pixel's own (w = 0 where none), for trace(back_position=...). Row 0 at the bottom;\n"
-        "pixels no triangle covers are all zeros. Triangles with a non-finite corner are skipped.");
+        "pixels no triangle covers are all zeros. Triangles with a non-finite corner are skipped.\n"
+        "memory_limit_mb: as for trace(); a request over it raises MemoryLimitExceeded.");
 }
 
 }  // namespace glint::py

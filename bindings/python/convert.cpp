@@ -56,6 +56,19 @@ Image image_from_array(const pyb::handle& obj, const char* name, float fill_alph
   return img;
 }
 
+std::pair<int, int> array_size(const pyb::handle& obj) {
+  if (!pyb::isinstance<pyb::array>(obj)) return {0, 0};
+  const auto a = pyb::reinterpret_borrow<pyb::array>(obj);
+  if (a.ndim() != 3 || a.shape(0) < 1 || a.shape(1) < 1 || a.shape(0) > kMaxImageSide ||
+      a.shape(1) > kMaxImageSide)
+    return {0, 0};
+  return {static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0))};
+}
+
+uint64_t binding_bytes(uint64_t pixels, int images, int outputs) {
+  return pixels * 16 * static_cast<uint64_t>(images + 1 + outputs);
+}
+
 pyb::array_t<float> array_from_image(const Image& img) {
   pyb::array_t<float> out({static_cast<pyb::ssize_t>(img.height), static_cast<pyb::ssize_t>(img.width),
                            static_cast<pyb::ssize_t>(4)});

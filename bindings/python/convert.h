@@ -3,8 +3,10 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "glint/image.h"
 #include "glint/mesh.h"
@@ -19,6 +21,13 @@ namespace pyb = pybind11;
 // else raises ValueError naming `name`.
 Image image_from_array(const pyb::handle& obj, const char* name, float fill_alpha = 1.0f,
                        int min_channels = 3);
+// Width and height of an [H, W, C] array, read without converting it, for the
+// memory budget; (0, 0) for anything the conversion will refuse anyway.
+std::pair<int, int> array_size(const pyb::handle& obj);
+// Bytes the bindings add to a request of `pixels`: `images` RGBA copies made
+// from the arguments plus one temporary (a strided array is made contiguous
+// first), and `outputs` float32 [H, W, 4] arrays returned.
+uint64_t binding_bytes(uint64_t pixels, int images, int outputs);
 // An RGBA Image as a new float32 [H, W, 4] array.
 pyb::array_t<float> array_from_image(const Image& img);
 // None, or (vertices float32 [N, 3], triangles int32 [M, 3]) as a validated

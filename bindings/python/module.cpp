@@ -11,6 +11,7 @@
 #include "glint/brdf.h"
 #include "glint/errors.h"
 #include "glint/marches.h"
+#include "glint/memory.h"
 #include "glint/mesh.h"
 #include "glint/pipeline.h"
 #include "glint/presets.h"
@@ -27,8 +28,9 @@ void bind_metrics(pyb::module_& m);
 namespace {
 
 TraceOptions trace_options(float max_distance, float resolution, int steps, float thickness,
-                           const std::string& march) {
+                           const std::string& march, double memory_limit_mb) {
   TraceOptions o;
+  o.memory_limit_mb = memory_limit_mb;
   o.max_distance = max_distance;
   o.resolution = resolution;
   o.steps = steps;
@@ -50,12 +52,21 @@ pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& nor
                              const pyb::handle& projection, float max_distance, float resolution,
                              int steps, float thickness, const std::string& march,
                              const pyb::handle& back_position, const pyb::handle& mesh,
-                             const std::string& backend, int threads) {
+                             const std::string& backend, int threads, double memory_limit_mb) {
+  // Before any copy: a 32768x32768 request must be refused with the memory still free.
+  if (auto [w, h] = array_size(position); w > 0) {
+    const uint64_t px = uint64_t(w) * uint64_t(h);
+    const int copies = back_position.is_none() ? 2 : 3;
+    require_memory(binding_bytes(px, copies, 1) +
+                       trace_bytes(w, h, march_info(march).id, backend != "cpu"),
+                   "trace at " + std::to_string(w) + "x" + std::to_string(h), memory_limit_mb);
+  }
   const Image pos = image_from_array(position, "position", 1.0f, 4);
   const Image nrm = image_from_array(normal, "normal", 0.0f, 3);
   require_same_size(pos, "position", nrm, "normal");
   const Mat4 proj = projection_from_array(projection);
-  const TraceOptions opt = trace_options(max_distance, resolution, steps, thickness, march);
+  const TraceOptions opt =
+      trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
   const std::optional<Image> back = optional_image(back_position, "back_position", pos);
   const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
   auto be = get_backend(backend, threads);
@@ -114,7 +125,19 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
                       float blur_separation, const std::string& combine,
                       const std::string& weighting, const std::string& blur,
                       const pyb::handle& specular_base, const pyb::handle& back_position,
-                      const pyb::handle& mesh, const std::string& backend, int threads) {
+                      const pyb::handle& mesh, const std::string& backend, int threads,
+                      double memory_limit_mb) {
+  PipelineOptions opt;
+  opt.weighting = parse_weighting(weighting);
+  opt.blur_mode = parse_blur_mode(blur);
+  opt.trace = trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
+  if (auto [w, h] = array_size(position); w > 0) {
+    const uint64_t px = uint64_t(w) * uint64_t(h);
+    const int copies = back_position.is_none() ? 4 : 5;
+    const int outputs = static_cast<int>(pipeline_layer_names().size());
+    require_memory(binding_bytes(px, copies, outputs) + pipeline_bytes(w, h, opt, backend != "cpu"),
+                   "pipeline at " + std::to_string(w) + "x" + std::to_string(h), memory_limit_mb);
+  }
   PipelineInputs in;
   in.position = image_from_array(position, "position", 1.0f, 4);
   in.normal = image_from_array(normal, "normal", 0.0f, 3);
@@ -129,10 +152,6 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
   }
   const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
   in.mesh = tris ? &*tris : nullptr;
-  PipelineOptions opt;
-  opt.weighting = parse_weighting(weighting);
-  opt.blur_mode = parse_blur_mode(blur);
-  opt.trace = trace_options(max_distance, resolution, steps, thickness, march);
   opt.blur.size = blur_size;
   opt.blur.separation = blur_separation;
   opt.combine = parse_combine(combine);
@@ -170,6 +189,10 @@ PYBIND11_MODULE(glint_core, m) {
 
   static pyb::exception<BackendUnavailable> backend_unavailable(m, "BackendUnavailable",
                                                                 PyExc_RuntimeError);
+  // A MemoryError: code that already handles running out of memory handles a
+  // refusal too, and the message says how to raise the limit.
+  static pyb::exception<MemoryLimitExceeded> memory_limit_exceeded(m, "MemoryLimitExceeded",
+                                                                   PyExc_MemoryError);
   pyb::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -177,6 +200,12 @@ PYBIND11_MODULE(glint_core, m) {
       PyErr_SetString(PyExc_ValueError, e.what());
     } catch (const BackendUnavailable& e) {
       PyErr_SetString(backend_unavailable.ptr(), e.what());
+    } catch (const MemoryLimitExceeded& e) {
+      // Sizes as attributes, so a caller can work out how far to scale down.
+      pyb::object exc = pyb::handle(memory_limit_exceeded.ptr())(e.what());
+      exc.attr("needed_bytes") = e.needed_bytes();
+      exc.attr("limit_bytes") = e.limit_bytes();
+      PyErr_SetObject(memory_limit_exceeded.ptr(), exc.ptr());
     }
   });
 
@@ -185,17 +214,29 @@ PYBIND11_MODULE(glint_core, m) {
   m.attr("STAGES") = pyb::cast(pipeline_stage_names());
   m.attr("MAX_SHININESS") = kMaxShininess;
   m.attr("MAX_STEPS") = kMaxSteps;
+  m.attr("MEMORY_LIMIT_ENV") = kMemoryLimitEnv;
+  m.def(
+      "memory_limit",
+      [](double limit_mb) {
+        const MemoryLimit l = memory_limit(limit_mb);
+        return pyb::make_tuple(l.bytes, l.source);
+      },
+      "memory_limit_mb"_a = 0.0,
+      "(bytes, source): the memory one call may allocate with this memory_limit_mb (0: the\n"
+      "default, GLINT_MEMORY_LIMIT_MB or half of physical memory) and where it came from.");
 
   m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
         "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
         "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
-        "backend"_a = "cpu", "threads"_a = 0,
+        "backend"_a = "cpu", "threads"_a = 0, "memory_limit_mb"_a = 0.0,
         "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
         "max_distance and thickness are view-space units; resolution in [0, 1];\n"
         "march: a name from marches(). back_position: optional float32 [H, W, 4], the\n"
         "surface behind each pixel (w = 0 where none), read by marches that use true\n"
         "thickness. mesh: (vertices float32 [N, 3], triangles int32 [M, 3]) in the same\n"
-        "view space, for marches that trace the scene's triangles ('exact').");
+        "view space, for marches that trace the scene's triangles ('exact').\n"
+        "memory_limit_mb: MiB the call may allocate (0: GLINT_MEMORY_LIMIT_MB or half of\n"
+        "physical memory); a larger request raises MemoryLimitExceeded (a MemoryError).");
   m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");
   m.def("march_details", &py_march_details,
         "{name: {description, options: {keyword: meaning}, needs_mesh, uses_back_position, gl}}.");
@@ -208,14 +249,14 @@ PYBIND11_MODULE(glint_core, m) {
         "combine"_a = "over", "weighting"_a = to_string(PipelineOptions{}.weighting),
         "blur"_a = to_string(PipelineOptions{}.blur_mode), "specular_base"_a = pyb::none(),
         "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
-        "backend"_a = "cpu", "threads"_a = 0,
+        "backend"_a = "cpu", "threads"_a = 0, "memory_limit_mb"_a = 0.0,
         "The whole pipeline. Returns a dict of float32 [H, W, 4] layers named by LAYERS\n"
         "('uv', 'reflection_color', 'reflection_blur', 'specular_weight', 'reflection',\n"
         "'combined') and 'stats': backend used, per-stage timings_ms, skipped stages, pixel\n"
         "counts. weighting: 'physical' (F0 * A + B, split-sum) or 'seed' (mean F0); blur:\n"
         "'cone' (ray length x GGX cone, mip chain) or 'box' (blur_size, blur_separation);\n"
         "specular_base: the engine's own specular (rgb), replaced where a hit is found\n"
-        "(combine 'over' only).");
+        "(combine 'over' only). memory_limit_mb: as for trace().");
 
   m.def(
       "reflection_color",

@@ -10,6 +10,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
 #include <OpenEXR/ImfInputPart.h>
 #include <OpenEXR/ImfMatrixAttribute.h>
 #include <OpenEXR/ImfMultiPartInputFile.h>
@@ -18,8 +19,12 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -30,6 +35,7 @@
 #include <thread>
 
 #include "glint/errors.h"
+#include "glint/memory.h"
 #include "glint/options.h"
 
 namespace glint {
@@ -86,6 +92,47 @@ Imf::Compression parse_compression(const std::string& name) {
                                        "\"zip\" or \"piz\", got " + in_quotes(name));
 }
 
+// An OpenEXR output stream on a file descriptor that remembers any failed
+// write. OpenEXR writes the line-offset table from OutputFile's destructor and
+// swallows what goes wrong there, so success is only known from this flag,
+// after the file object is gone.
+class FdStream final : public Imf::OStream {
+ public:
+  FdStream(int fd, const std::string& name) : Imf::OStream(name.c_str()), fd_(fd) {}
+  void write(const char c[], int n) override {
+    while (n > 0) {
+      const ssize_t k = ::pwrite(fd_, c, static_cast<size_t>(n), static_cast<off_t>(pos_));
+      if (k < 0 && errno == EINTR) continue;
+      if (k <= 0) {
+        if (!error_) error_ = errno ? errno : EIO;
+        throw std::runtime_error(std::strerror(error_));
+      }
+      c += k;
+      n -= static_cast<int>(k);
+      pos_ += static_cast<uint64_t>(k);
+    }
+  }
+  uint64_t tellp() override { return pos_; }
+  void seekp(uint64_t pos) override { pos_ = pos; }
+  int error() const { return error_; }
+
+ private:
+  int fd_;
+  uint64_t pos_ = 0;
+  int error_ = 0;
+};
+
+// A name beside `path` for the file being written: same folder, so that the
+// final rename never crosses a file system; hidden, and unique per process
+// and call so that concurrent writers of one path never share it.
+std::string temp_path_for(const std::string& path) {
+  static std::atomic<unsigned> counter{0};
+  const fs::path p(path);
+  const std::string name = "." + p.filename().string() + ".glint-tmp-" + std::to_string(::getpid()) +
+                           "-" + std::to_string(counter++);
+  return (p.parent_path() / name).string();
+}
+
 int strip_rows(int64_t width, int64_t floats_per_pixel) {
   const int64_t per_row = std::max<int64_t>(1, width * floats_per_pixel);
   return static_cast<int>(std::clamp<int64_t>(kStripFloats / per_row, 1, kMaxStripRows));
@@ -129,7 +176,7 @@ void read_projection(const Imf::Header& h, const std::string& path, ExrFile& out
   out.projection = m;
 }
 
-ExrFile read_exr_file(const std::string& path) {
+ExrFile read_exr_file(const std::string& path, double memory_limit_mb) {
   Imf::MultiPartInputFile file(path.c_str());
   const int parts = file.parts();
   if (parts < 1) bad_file(path, "holds no image parts");
@@ -202,6 +249,10 @@ ExrFile read_exr_file(const std::string& path) {
     bad_file(path, "has no R/G/B/A or X/Y/Z/W channels (found " +
                        std::to_string(out.skipped_channels.size()) + " other channels)");
 
+  require_memory(exr_read_bytes(W, H, sources.size()),
+                 "reading " + in_quotes(path) + " (" + std::to_string(sources.size()) + " layers of " +
+                     size_text(display) + ")",
+                 memory_limit_mb);
   // Zero outside the data window ("nothing there"), defaults inside it.
   for (auto& [name, src] : sources) out.layers[name] = Image(static_cast<int>(W), static_cast<int>(H));
 
@@ -263,7 +314,7 @@ ExrFile read_exr_file(const std::string& path) {
 
 }  // namespace
 
-ExrFile read_exr(const std::string& path) {
+ExrFile read_exr(const std::string& path, double memory_limit_mb) {
   if (path.empty()) throw InvalidArgument("path", "expected the name of an EXR file, got \"\"");
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
@@ -281,7 +332,7 @@ ExrFile read_exr(const std::string& path) {
       bad_file(path, "is not an OpenEXR file (bad magic number)");
   }
   try {
-    return read_exr_file(path);
+    return read_exr_file(path, memory_limit_mb);
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
@@ -316,7 +367,21 @@ void write_exr(const std::string& path, const std::map<std::string, Image>& laye
   const Imf::Compression compression = parse_compression(options.compression);
 
   const int W = first.width, H = first.height;
-  bool created = false;
+  // Written to a temporary file in the same folder and renamed over `path`
+  // only when complete and synced: a full disk, a failing write or a killed
+  // process never leaves a truncated file under the final name (and an older
+  // file there stays whole until the new one replaces it).
+  const std::string tmp = temp_path_for(path);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0)
+    throw Error("cannot write EXR " + in_quotes(path) + ": cannot create a file in its folder: " +
+                std::strerror(errno));
+  auto fail = [&](const std::string& why) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw Error("cannot write EXR " + in_quotes(path) + ": " + why);
+  };
+  FdStream stream(fd, tmp);
   try {
     Imf::Header header(W, H);
     header.compression() = compression;
@@ -334,8 +399,7 @@ void write_exr(const std::string& path, const std::map<std::string, Image>& laye
         header.channels().insert(name.empty() ? std::string(s) : name + "." + s,
                                  Imf::Channel(Imf::FLOAT));
 
-    Imf::OutputFile file(path.c_str(), header);
-    created = true;
+    Imf::OutputFile file(stream, header);
     const int rows = strip_rows(W, 4 * static_cast<int64_t>(layers.size()));
     const size_t row_floats = static_cast<size_t>(W) * 4;
     const size_t plane = row_floats * static_cast<size_t>(rows);
@@ -358,13 +422,20 @@ void write_exr(const std::string& path, const std::map<std::string, Image>& laye
       file.setFrameBuffer(fb);
       file.writePixels(y1 - y0 + 1);
     }
-  } catch (const Error&) {
-    throw;
   } catch (const std::exception& e) {
-    // A half-written file would read back as a corrupt one later; better none.
-    std::error_code ec;
-    if (created && fs::is_regular_file(path, ec)) fs::remove(path, ec);
-    throw Error("cannot write EXR " + in_quotes(path) + ": " + e.what());
+    fail(stream.error() ? std::strerror(stream.error()) : e.what());
+  }
+  if (stream.error()) fail(std::strerror(stream.error()));  // the offset table, written on close
+  if (::fsync(fd) != 0) fail(std::string("fsync: ") + std::strerror(errno));
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw Error("cannot write EXR " + in_quotes(path) + ": close: " + std::strerror(err));
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw Error("cannot write EXR " + in_quotes(path) + ": " + std::strerror(err));
   }
 }
 

@@ -7,6 +7,7 @@
 
 #include "parallel.h"
 #include "glint/errors.h"
+#include "glint/memory.h"
 
 namespace glint {
 namespace {
@@ -90,6 +91,10 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   }
   validate_projection(in.projection);
   validate(opt);
+  require_memory(pipeline_bytes(in.position.width, in.position.height, opt, backend.name() == "gl"),
+                 "pipeline at " + std::to_string(in.position.width) + "x" +
+                     std::to_string(in.position.height),
+                 opt.trace.memory_limit_mb);
 
   PipelineResult res;
   const int w = in.position.width, h = in.position.height;

@@ -28,6 +28,21 @@ def test_core_error_is_reported_and_the_frame_still_renders(blender, samples, tm
     assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
 
 
+def test_a_frame_over_the_memory_limit_renders_without_reflections(blender, samples, tmp_path):
+    out = str(tmp_path / "memory")
+    saved = blender.env
+    # 1 MiB: the sample's G-buffer alone is more, so the core refuses before allocating.
+    blender.env = {**saved, "GLINT_MEMORY_LIMIT_MB": "1"}
+    try:
+        log = blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
+                                                            "glint": {"backend": "CPU"}})
+    finally:
+        blender.env = saved
+    assert "rendered WITHOUT reflections: over Glint's memory limit" in log, log[-2000:]
+    assert "GLINT_MEMORY_LIMIT_MB" in log
+    assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
+
+
 @pytest.fixture()
 def no_egl(blender):
     """An environment where no EGL driver can be found (glvnd finds no vendor)."""

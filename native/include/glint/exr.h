@@ -53,8 +53,12 @@ struct ExrWriteOptions {
 // HALF and FLOAT channels are read as float; UINT channels are an error.
 // Throws InvalidArgument("path", ...) for a missing file, a file that is not
 // an EXR, unsupported channel types or sampling, deep data and parts of
-// different sizes; glint::Error for a file that fails while being read.
-ExrFile read_exr(const std::string& path);
+// different sizes; glint::Error for a file that fails while being read;
+// MemoryLimitExceeded (glint/memory.h) when the layers the header announces
+// would take more than memory_limit_mb (0: the default limit), checked
+// before any pixel is allocated, since a few hundred bytes of header can
+// promise gigabytes.
+ExrFile read_exr(const std::string& path, double memory_limit_mb = 0.0);
 
 // Writes every layer as four FLOAT channels (never HALF: positions and
 // normals need all 24 bits). Throws InvalidArgument("layers", ...) for no

@@ -37,6 +37,9 @@ struct TraceOptions {
   int steps = 10;              // an iteration budget; its meaning per march is in marches.h
   float thickness = 0.5f;      // view-space units: how far behind a surface still counts as a hit
   March march = March::Seed;
+  // MiB this call (a trace, or the whole pipeline) may allocate; 0: the default,
+  // GLINT_MEMORY_LIMIT_MB or a share of physical memory (glint/memory.h).
+  double memory_limit_mb = 0.0;
 };
 
 struct BlurOptions {

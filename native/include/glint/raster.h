@@ -36,6 +36,8 @@ struct RasterInputs {
   int height = 0;
   // Also rasterize the back-face layer (GBufferImages::back_position).
   bool back_layer = false;
+  // MiB the call may allocate; 0: the default (glint/memory.h, TraceOptions).
+  double memory_limit_mb = 0.0;
 };
 
 struct GBufferImages {

@@ -5,6 +5,7 @@
 
 #include "glint/errors.h"
 #include "glint/marches.h"
+#include "glint/memory.h"
 #include "glint/stages.h"
 #include "look.h"
 #include "march.h"
@@ -112,6 +113,7 @@ class CpuBackend final : public Backend {
 
   Image trace(const TraceInputs& in, const TraceOptions& opt) override {
     require_trace_inputs(in, opt);
+    require_trace_memory(in, opt, false);
     return march_info(opt.march).cpu(in, opt, threads_);
   }
 

@@ -24,6 +24,7 @@
 #include <limits>
 
 #include "glint/errors.h"
+#include "glint/memory.h"
 #include "glint/stages.h"
 #include "parallel.h"
 
@@ -368,6 +369,7 @@ constexpr double kBackSeparation = 1e-6;
 
 GBufferImages rasterize(const RasterInputs& in, int threads) {
   validate(in);
+  require_raster_memory(in, false);
   const int width = in.width, height = in.height;
   const Mesh& mesh = in.mesh;
   const Mat4& proj = in.projection;

@@ -30,6 +30,7 @@
 #include "glint/backend.h"
 #include "glint/errors.h"
 #include "glint/marches.h"
+#include "glint/memory.h"
 
 namespace glint {
 namespace gl {
@@ -52,6 +53,7 @@ class GlBackend final : public Backend {
 
   Image trace(const TraceInputs& in, const TraceOptions& opt) override {
     require_trace_inputs(in, opt);
+    require_trace_memory(in, opt, true);
     // A march with no GPU form runs its CPU reference (marches() says which).
     const MarchInfo& info = march_info(opt.march);
     if (!info.gl_program) return info.cpu(in, opt, 0);
@@ -114,6 +116,7 @@ class GlBackend final : public Backend {
 
   GBufferImages rasterize(const RasterInputs& in) override {
     validate(in);
+    require_raster_memory(in, true);
     GBufferImages out;
     worker_.run([&](GlState& s) { out = s.rasterize(in); });
     return out;
