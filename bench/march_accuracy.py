@@ -6,7 +6,8 @@ and so is every pixel's mirror hit; a march's reflected-uv buffer is scored
 against those hits as SPEC.md defines it: a pixel *reports* when its
 visibility > 1e-3, precision is the share of reports within 1.5 px of the exact
 visible hit, recall the share of exact visible hits reported within 1.5 px.
-Times are medians of --repeat runs, each backend and march in the same process.
+Times are medians of --repeat runs, each backend and march in the same process, the
+repeats of all marches of a scene taken in turn so that the machine's load falls on all alike.
 
   /usr/bin/python3 bench/march_accuracy.py --sizes 640x480,1920x1080 --repeat 3
 """
@@ -60,13 +61,16 @@ def scene_data(name, w, h, cache_dir):
     return d
 
 
-def timed(fn, repeat):
-    times, out = [], None
+def timed_round_robin(fns, repeat):
+    """[(median ms, last output)] of each fn, the repeats taken in turn (a, b, c, a, b, c, ...)
+    so that a change in the machine's load while measuring falls on all of them alike."""
+    times, outs = [[] for _ in fns], [None] * len(fns)
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append((time.perf_counter() - t0) * 1000.0)
-    return statistics.median(times), out
+        for k, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            outs[k] = fn()
+            times[k].append((time.perf_counter() - t0) * 1000.0)
+    return [(statistics.median(t), o) for t, o in zip(times, outs)]
 
 
 def main():
@@ -96,12 +100,12 @@ def main():
         for scene in args.scenes.split(","):
             d = scene_data(scene, w, h, args.cache)
             for backend in args.backends.split(","):
-                seed_ms = None
-                for label, kw, back in runs:
-                    extra = dict(back_position=d["back"]) if back else {}
-                    ms, uv = timed(lambda: glint_core.trace(d["position"], d["normal"], d["projection"],
-                                                            backend=backend, **kw, **extra), args.repeat)
-                    seed_ms = seed_ms or ms
+                calls = [lambda kw=kw, back=back: glint_core.trace(
+                    d["position"], d["normal"], d["projection"], backend=backend, **kw,
+                    **(dict(back_position=d["back"]) if back else {})) for _, kw, back in runs]
+                results = timed_round_robin(calls, args.repeat)
+                seed_ms = results[0][0]
+                for (label, _, _), (ms, uv) in zip(runs, results):
                     p, r = score(uv, d["exact_uv"], d["visible"])
                     print(f"| {scene} | {w}x{h} | {backend} | {label} | {ms:.0f} | {ms / seed_ms:.2f} | "
                           f"{p:.4f} | {r:.4f} |", flush=True)
@@ -118,12 +122,10 @@ def cost_table(args):
         w, h = (int(v) for v in size.split("x"))
         d = scene_data("floor", w, h, args.cache)
         for md in (2.0, 5.0, 15.0, 100.0, 1e6):
-            t = []
-            for kw in (dict(march="seed"), balanced):
-                kw = dict(kw, max_distance=md)
-                ms, _ = timed(lambda: glint_core.trace(d["position"], d["normal"], d["projection"], **kw),
-                              args.repeat)
-                t.append(ms)
+            t = [ms for ms, _ in timed_round_robin(
+                [lambda kw=kw: glint_core.trace(d["position"], d["normal"], d["projection"],
+                                                **dict(kw, max_distance=md))
+                 for kw in (dict(march="seed"), balanced)], args.repeat)]
             print(f"| {w}x{h} | {md:g} | {t[0]:.0f} | {t[1]:.0f} | {t[1] / t[0]:.2f} |", flush=True)
 
 

@@ -161,46 +161,61 @@ void main() {
   float nt = ray_num(t);
   float bt = ray_b(t);
   int level = 0;
-  for (int it = 0; it < budget && t < g_t_end; ++it) {
-    // Level sizes by shift (GL's iterated floor(size / 2) is floor(size / 2^level),
-    // at least 1), not textureSize(): llvmpipe was seen to return a stale
-    // size for a level that changed inside this loop. The loop has no
-    // `continue` for the same reason.
-    ivec2 size = max(ivec2(1), ivec2(u_size) >> level);
-    ivec2 c = cell_at(level, t, size);
-    float te = ray_exit(cell_bounds(level, c, size));
-    if (!(te > t)) te = uintBitsToFloat(floatBitsToUint(t) + 1u);  // always move on (t >= 0)
-    float ne = ray_num(te);
-    float be = ray_b(te);
-    vec2 cell = texelFetch(u_pyramid, c, level).xy;
-    precise float lt = cell.x * bt;
-    precise float le = cell.x * be;
-    precise float ht = cell.y * bt;
-    precise float he = cell.y * be;
-    bool descend = false;
-    if ((nt >= lt || ne >= le) && (nt <= ht || ne <= he)) {
-      if (level > 0) {
-        descend = true;  // something in this cell may meet the ray: look closer
+  int it = 0;
+  // The walk stops at each level-0 texel that may meet the ray and the
+  // texel's test runs outside the walk's loop: a SIMD rasterizer such as
+  // llvmpipe runs the body of a loop for all lanes whenever any lane needs
+  // it, so inside, the test (three fetches and the divisions) would cost
+  // every step of the walk instead of the one or two texels a ray tests.
+  while (it < budget && t < g_t_end) {
+    bool test = false;
+    ivec2 c;
+    float te, ne, be;
+    for (; it < budget && t < g_t_end; ++it) {
+      // Level sizes by shift (GL's iterated floor(size / 2) is floor(size / 2^level),
+      // at least 1), not textureSize(): llvmpipe was seen to return a stale
+      // size for a level that changed inside this loop. The loop has no
+      // `continue` for the same reason.
+      ivec2 size = max(ivec2(1), ivec2(u_size) >> level);
+      c = cell_at(level, t, size);
+      te = ray_exit(cell_bounds(level, c, size));
+      if (!(te > t)) te = uintBitsToFloat(floatBitsToUint(t) + 1u);  // always move on (t >= 0)
+      ne = ray_num(te);
+      be = ray_b(te);
+      vec2 cell = texelFetch(u_pyramid, c, level).xy;
+      precise float lt = cell.x * bt;
+      precise float le = cell.x * be;
+      precise float ht = cell.y * bt;
+      precise float he = cell.y * be;
+      bool overlap = (nt >= lt || ne >= le) && (nt <= ht || ne <= he);
+      if (overlap && level == 0) {
+        test = true;
+        break;
+      }
+      if (overlap) {
+        --level;  // something in this cell may meet the ray: look closer
       } else {
-        float th;
-        int outcome = texel_hit(c, t, te, th);
-        if (outcome == BLOCKED) return;
-        if (outcome == HIT) {
-          precise float u = (g_f0.x + th * g_d.x) / u_size.x;
-          precise float v = (g_f0.y + th * g_d.y) / u_size.y;
-          if (!finite_f(u) || !finite_f(v)) return;
-          out_uv = vec4(u, v, 1.0, 1.0);
-          return;
-        }
+        t = te;
+        nt = ne;
+        bt = be;
+        if (level < top) ++level;  // empty so far: try a bigger stride
       }
     }
-    if (descend) {
-      --level;
-    } else {
-      t = te;
-      nt = ne;
-      bt = be;
-      if (level < top) ++level;  // empty so far: try a bigger stride
+    if (!test) return;
+    float th;
+    int outcome = texel_hit(c, t, te, th);
+    if (outcome == BLOCKED) return;
+    if (outcome == HIT) {
+      precise float u = (g_f0.x + th * g_d.x) / u_size.x;
+      precise float v = (g_f0.y + th * g_d.y) / u_size.y;
+      if (!finite_f(u) || !finite_f(v)) return;
+      out_uv = vec4(u, v, 1.0, 1.0);
+      return;
     }
+    t = te;
+    nt = ne;
+    bt = be;
+    if (level < top) ++level;
+    ++it;
   }
 }

@@ -18,6 +18,7 @@ struct HizPyramid {
   int levels = 0;
   std::vector<int> width, height;
   std::vector<size_t> offset;  // first cell of each level, in cells
+  std::vector<float> scale;    // 1 / 2^level: pixels to cells, exactly
   // Two floats per cell: the nearest view distance of any surface in it
   // (over each texel's whole footprint, not only its centre), and the
   // farthest view distance its surfaces reach once their thickness is added.

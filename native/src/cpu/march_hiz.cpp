@@ -146,6 +146,8 @@ struct Ray {
   // inv holds 1 / d (0 where d is 0): a product per side instead of a
   // division, in the one order both backends use.
   float inv[2];
+  // Picking the cell the line is in: kCellNudge along each axis it moves on.
+  float nudge[2];
   float exit(const int box[4]) const {
     float te = t_end;
     if (d[0] != 0.0f)
@@ -178,6 +180,7 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
   if (!finite(r.f0[0]) || !finite(r.f0[1]) || !finite(r.d[0]) || !finite(r.d[1])) return false;
   r.inv[0] = r.d[0] != 0.0f ? 1.0f / r.d[0] : 0.0f;
   r.inv[1] = r.d[1] != 0.0f ? 1.0f / r.d[1] : 0.0f;
+  for (int k = 0; k < 2; ++k) r.nudge[k] = r.d[k] > 0.0f ? kCellNudge : (r.d[k] < 0.0f ? -kCellNudge : 0.0f);
   r.b0 = b0;
   r.db = b1 - b0;
   const float fa[3] = {from.x, from.y, from.z}, ea[3] = {end.x, end.y, end.z};
@@ -193,12 +196,9 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
 
 // The cell of `level` that the line occupies just after fraction t.
 inline void cell_at(const HizPyramid& p, const Ray& r, int level, float t, int& i, int& j) {
-  const float nx = r.d[0] > 0.0f ? kCellNudge : (r.d[0] < 0.0f ? -kCellNudge : 0.0f);
-  const float ny = r.d[1] > 0.0f ? kCellNudge : (r.d[1] < 0.0f ? -kCellNudge : 0.0f);
-  const float px = r.f0[0] + t * r.d[0] + nx, py = r.f0[1] + t * r.d[1] + ny;
-  const float scale = 1.0f / static_cast<float>(1 << level);  // a power of two: exact
+  const float px = r.f0[0] + t * r.d[0] + r.nudge[0], py = r.f0[1] + t * r.d[1] + r.nudge[1];
   // Truncation is floor for the non-negative values that reach it.
-  const float sx = px * scale, sy = py * scale;
+  const float sx = px * p.scale[level], sy = py * p.scale[level];
   const int wl = p.width[level], hl = p.height[level];
   i = !(sx > 0.0f) ? 0 : (sx >= static_cast<float>(wl) ? wl - 1 : static_cast<int>(sx));
   j = !(sy > 0.0f) ? 0 : (sy >= static_cast<float>(hl) ? hl - 1 : static_cast<int>(sy));
@@ -319,6 +319,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     p.width.push_back(w);
     p.height.push_back(h);
     p.offset.push_back(cells);
+    p.scale.push_back(1.0f / static_cast<float>(1 << p.scale.size()));
     cells += static_cast<size_t>(w) * h;
     if (w == 1 && h == 1) break;
     w = std::max(1, w / 2);
