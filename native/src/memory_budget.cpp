@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "glint/marches.h"
+#include "glint/mesh.h"
 #include "glint/raster.h"
 #include "glint/stages.h"
 
@@ -27,17 +29,9 @@ uint64_t mib_to_bytes(double mb) {
   return b >= 1.8e19 ? UINT64_MAX : static_cast<uint64_t>(b);
 }
 
-// Per-pixel bytes a march allocates beside its output on the CPU.
-uint64_t march_scratch(March march) {
-  switch (march) {
-    case March::Seed:
-    case March::Linear:
-      return 4;  // one float view distance per texel
-    case March::Hiz:
-      return 12;  // min/max pyramid: 2 floats per cell, 4/3 cells per texel, rounded up
-  }
-  return 16;  // a march added without a row here: assume a whole extra image
-}
+// Per-pixel bytes a march allocates beside its output on the CPU (its row
+// of the table of marches says).
+uint64_t march_scratch(March march) { return march_info(march).scratch_per_pixel; }
 
 }  // namespace
 
@@ -92,9 +86,11 @@ void require_memory(uint64_t bytes, const std::string& request, double limit_mb)
       bytes, limit.bytes);
 }
 
-uint64_t trace_bytes(int width, int height, March march, bool gl) {
+uint64_t trace_bytes(int width, int height, March march, bool gl, uint64_t triangles) {
   const uint64_t p = static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
-  if (!gl) return p * (kImage + march_scratch(march));
+  const uint64_t mesh = triangles * march_info(march).scratch_per_triangle;
+  // A march with no GL form runs its CPU code whatever the backend.
+  if (!gl || !march_info(march).gl_program) return p * (kImage + march_scratch(march)) + mesh;
   // Up to four input textures (position, normal, specular, back_position), the
   // render target, the read-back image, and the pyramid where a march has one.
   return p * (4 * kImage + kImage + kImage + march_scratch(march));
@@ -132,7 +128,8 @@ std::string size_of(int w, int h) { return std::to_string(w) + "x" + std::to_str
 
 void require_trace_memory(const TraceInputs& in, const TraceOptions& opt, bool gl) {
   const int w = in.position.width, h = in.position.height;
-  require_memory(trace_bytes(w, h, opt.march, gl), "trace at " + size_of(w, h), opt.memory_limit_mb);
+  const uint64_t triangles = in.mesh ? in.mesh->triangles.size() / 3 : 0;
+  require_memory(trace_bytes(w, h, opt.march, gl, triangles), "trace at " + size_of(w, h), opt.memory_limit_mb);
 }
 
 void require_raster_memory(const RasterInputs& in, bool gl) {

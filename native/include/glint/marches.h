@@ -29,6 +29,10 @@ struct MarchInfo {
   const char* description;  // one line, for help texts and tooltips
   std::vector<MarchKnob> knobs;  // the options it reads; the others are ignored
   bool needs_mesh;          // reads TraceInputs::mesh (the scene's triangles)
+  // What the CPU implementation allocates beside its output, for the memory
+  // budget (glint/memory.h): bytes per pixel, and per triangle of the mesh.
+  unsigned scratch_per_pixel;
+  unsigned scratch_per_triangle;
   bool uses_back_position;  // reads TraceInputs::back_position where given
   CpuTraceFn cpu;           // the CPU implementation
   // The GL backend's fragment program (a file in shaders/), or nullptr when
