@@ -9,29 +9,43 @@
 
 layout(location = 0) out vec4 out_normal;
 
-// Toward the seen neighbour whose depth is closer (the high one on a tie),
-// from low to high; false when neither is seen.
+// The seen texel `k` steps along `step`, or false.
+bool neighbour(ivec2 px, ivec2 step, int k, out vec4 q) {
+  ivec2 c = px + k * step;
+  ivec2 size = ivec2(u_size);
+  q = vec4(0.0);
+  if (c.x < 0 || c.y < 0 || c.x >= size.x || c.y >= size.y) return false;
+  q = texelFetch(u_position, c, 0);
+  return texel_seen(q);
+}
+
+// How far the depth one side predicts for the texel misses its own (miss()
+// in hiz_planes.cpp).
+float miss(vec3 p, vec4 a1, bool has_a2, vec4 a2) {
+  precise float r;
+  if (has_a2) {
+    precise float e = 2.0 * a1.z - a2.z;
+    r = abs(e - p.z);
+  } else {
+    r = abs(a1.z - p.z);
+  }
+  return r;
+}
+
+// Toward the seen neighbour whose side predicts the texel's depth better
+// (the high one on a tie), from low to high; false when neither is seen.
 bool axis_difference(ivec2 px, vec3 p, ivec2 step, out vec3 e) {
   e = vec3(0.0);
-  ivec2 size = ivec2(u_size);
-  ivec2 a = px - step;
-  ivec2 b = px + step;
-  bool lo_seen = false;
-  bool hi_seen = false;
-  vec4 lo = vec4(0.0);
-  vec4 hi = vec4(0.0);
-  if (a.x >= 0 && a.y >= 0) {
-    lo = texelFetch(u_position, a, 0);
-    lo_seen = texel_seen(lo);
-  }
-  if (b.x < size.x && b.y < size.y) {
-    hi = texelFetch(u_position, b, 0);
-    hi_seen = texel_seen(hi);
-  }
+  vec4 lo;
+  vec4 hi;
+  vec4 lo2;
+  vec4 hi2;
+  bool lo_seen = neighbour(px, step, -1, lo);
+  bool hi_seen = neighbour(px, step, 1, hi);
   if (hi_seen && lo_seen) {
-    precise float dl = abs(lo.z - p.z);
-    precise float dh = abs(hi.z - p.z);
-    if (dl < dh) hi_seen = false;
+    bool lo2_seen = neighbour(px, step, -2, lo2);
+    bool hi2_seen = neighbour(px, step, 2, hi2);
+    if (miss(p, lo, lo2_seen, lo2) < miss(p, hi, hi2_seen, hi2)) hi_seen = false;
   }
   if (hi_seen) {
     precise vec3 v = vec3(hi.x - p.x, hi.y - p.y, hi.z - p.z);

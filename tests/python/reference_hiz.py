@@ -34,19 +34,25 @@ def _usable(n):
 
 def plane_normals(pos, nrm):
     """Each texel's plane normal: per axis the difference to the seen
-    neighbour whose depth is closer to the texel's (the high one on a tie),
+    neighbour whose side predicts the texel's depth better (the line through
+    its two texels, or its own depth where the second is unseen; the high one
+    on a tie),
     n = cross(dx, dy) facing the shading normal's side; the shading normal
     where an axis has no seen neighbour or the texel none usable."""
     h, w = pos.shape[:2]
     out = np.array(nrm[..., :3], float)
 
+    def seen_at(x, y):
+        return pos[y, x] if 0 <= x < w and 0 <= y < h and _seen(pos[y, x]) else None
+
+    def miss(p, a1, a2):
+        return abs(2.0 * a1[2] - a2[2] - p[2]) if a2 is not None else abs(a1[2] - p[2])
+
     def diff(x, y, ax, ay):
         p = pos[y, x, :3]
-        lo = pos[y - ay, x - ax] if x - ax >= 0 and y - ay >= 0 else None
-        hi = pos[y + ay, x + ax] if x + ax < w and y + ay < h else None
-        lo = lo if lo is not None and _seen(lo) else None
-        hi = hi if hi is not None and _seen(hi) else None
-        if lo is not None and hi is not None and abs(lo[2] - p[2]) < abs(hi[2] - p[2]):
+        lo, hi = seen_at(x - ax, y - ay), seen_at(x + ax, y + ay)
+        if lo is not None and hi is not None and \
+                miss(p, lo, seen_at(x - 2 * ax, y - 2 * ay)) < miss(p, hi, seen_at(x + 2 * ax, y + 2 * ay)):
             hi = None
         if hi is not None:
             return hi[:3] - p

@@ -10,16 +10,32 @@
 namespace glint::cpu {
 namespace {
 
-// The difference along one axis: toward the seen neighbour whose depth is
-// closer to the texel's (the high one on a tie), always from low to high so
-// both axes' differences keep one handedness. False when neither is seen.
+// The seen texel `k` steps from (x, y) along (ax, ay), or null.
+const float* neighbour(const Image& position, int x, int y, int ax, int ay, int k) {
+  const int nx = x + k * ax, ny = y + k * ay;
+  if (nx < 0 || ny < 0 || nx >= position.width || ny >= position.height) return nullptr;
+  const float* q = position.px(nx, ny);
+  return texel_seen(q) ? q : nullptr;
+}
+
+// How far the depth one side predicts for the texel misses its own: the line
+// through that side's two texels where both are seen, else its adjacent one.
+// The line is what tells a grazing floor's texel from the wall it meets: the
+// wall's base can be closer in depth than the floor's next texel.
+float miss(const float* p, const float* a1, const float* a2) {
+  return a2 ? std::fabs((2.0f * a1[2] - a2[2]) - p[2]) : std::fabs(a1[2] - p[2]);
+}
+
+// The difference along one axis: toward the seen neighbour whose side
+// predicts the texel's depth better (the high one on a tie), always from low
+// to high so both axes' differences keep one handedness. False when neither
+// neighbour is seen.
 bool axis_difference(const Image& position, const float* p, int x, int y, int ax, int ay, float e[3]) {
-  const int w = position.width, h = position.height;
-  const float* lo = nullptr;
-  const float* hi = nullptr;
-  if (x - ax >= 0 && y - ay >= 0 && texel_seen(position.px(x - ax, y - ay))) lo = position.px(x - ax, y - ay);
-  if (x + ax < w && y + ay < h && texel_seen(position.px(x + ax, y + ay))) hi = position.px(x + ax, y + ay);
-  if (hi && lo && std::fabs(lo[2] - p[2]) < std::fabs(hi[2] - p[2])) hi = nullptr;
+  const float* lo = neighbour(position, x, y, ax, ay, -1);
+  const float* hi = neighbour(position, x, y, ax, ay, 1);
+  if (hi && lo &&
+      miss(p, lo, neighbour(position, x, y, ax, ay, -2)) < miss(p, hi, neighbour(position, x, y, ax, ay, 2)))
+    hi = nullptr;
   if (hi) {
     for (int k = 0; k < 3; ++k) e[k] = hi[k] - p[k];
   } else if (lo) {
