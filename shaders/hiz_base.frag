@@ -22,7 +22,7 @@ void main() {
   float lo = d;
   float hi = d;
   vec4 L;
-  if (texel_plane(texelFetch(u_normal, px, 0).xyz, p.xyz, L)) {
+  if (texel_plane(texelFetch(u_planes, px, 0).xyz, p.xyz, L)) {
     precise float spread = FOOTPRINT_SPREAD * abs(d) + t;
     precise float sxs = 2.0 / u_size.x;
     precise float sys = 2.0 / u_size.y;

@@ -108,7 +108,7 @@ const int HIT = 1;
 const int BLOCKED = 2;
 
 int texel_hit(ivec2 c, float ta, float tb, out float t_hit) {
-  vec3 n = texelFetch(u_normal, c, 0).xyz;
+  vec3 n = texelFetch(u_planes, c, 0).xyz;
   t_hit = ta;
   if (!normal_usable(n)) return HIT;
   vec3 p = texelFetch(u_position, c, 0).xyz;

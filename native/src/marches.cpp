@@ -39,7 +39,7 @@ const std::vector<MarchInfo>& march_table() {
         {"thickness",
          "how far behind a surface is solid (a ray there is blocked: nothing reported), view "
          "units, where no back_position gives the real depth"}},
-       false, 12, 0, true, &cpu::trace_hiz, "trace_hiz.frag"},
+       false, 28, 0, true, &cpu::trace_hiz, "trace_hiz.frag"},
       {March::Exact, "exact",
        "The ground truth: each pixel's mirror ray traced against the scene's triangles (Embree), "
        "reported where the camera sees the hit; runs on the CPU whatever the backend",

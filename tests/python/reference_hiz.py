@@ -5,7 +5,8 @@ screen-space line texel by texel from the texel after its origin, the first
 texel where the ray's depth span meets the texel's footprint range and the
 texel's tangent plane says Hit (the ray crosses it from the front, or is
 behind it by no more than a rounding slack) or Blocked (behind it within its
-thickness: report nothing). The core reaches the same texel through a min/max
+thickness: report nothing). A texel's plane has its geometric normal, rebuilt
+from the positions (plane_normals()), not its shading normal. The core reaches the same texel through a min/max
 pyramid; this file visits every texel on the line, in Python floats (IEEE
 double), so agreeing with it shows the pyramid never skips one.
 
@@ -29,6 +30,48 @@ def _seen(p):
 
 def _usable(n):
     return all(math.isfinite(v) for v in n) and any(v != 0 for v in n)
+
+
+def plane_normals(pos, nrm):
+    """Each texel's plane normal: per axis the difference to the seen
+    neighbour whose side predicts the texel's depth better (the line through
+    its two texels, or its own depth where the second is unseen; the high one
+    on a tie),
+    n = cross(dx, dy) facing the shading normal's side; the shading normal
+    where an axis has no seen neighbour or the texel none usable."""
+    h, w = pos.shape[:2]
+    out = np.array(nrm[..., :3], float)
+
+    def seen_at(x, y):
+        return pos[y, x] if 0 <= x < w and 0 <= y < h and _seen(pos[y, x]) else None
+
+    def miss(p, a1, a2):
+        return abs(2.0 * a1[2] - a2[2] - p[2]) if a2 is not None else abs(a1[2] - p[2])
+
+    def diff(x, y, ax, ay):
+        p = pos[y, x, :3]
+        lo, hi = seen_at(x - ax, y - ay), seen_at(x + ax, y + ay)
+        if lo is not None and hi is not None and \
+                miss(p, lo, seen_at(x - 2 * ax, y - 2 * ay)) < miss(p, hi, seen_at(x + 2 * ax, y + 2 * ay)):
+            hi = None
+        if hi is not None:
+            return hi[:3] - p
+        return None if lo is None else p - lo[:3]
+
+    for y in range(h):
+        for x in range(w):
+            s = nrm[y, x, :3]
+            if not _seen(pos[y, x]) or not _usable(s):
+                continue
+            ex, ey = diff(x, y, 1, 0), diff(x, y, 0, 1)
+            if ex is None or ey is None:
+                continue
+            c = np.cross(ex, ey)
+            length = np.linalg.norm(c)
+            if not (length > 0 and math.isfinite(length)):
+                continue
+            out[y, x] = c / length * (-1.0 if s @ c < 0 else 1.0)
+    return out
 
 
 def _eye(proj):
@@ -56,6 +99,7 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
     h, w = pos.shape[:2]
     eye_kind, eye = _eye(P)
     out = np.zeros((h, w, 4))
+    planes = plane_normals(pos, nrm)
 
     def texel_thickness(x, y):
         if back is not None and _seen(back[y, x]) and -back[y, x, 2] > -pos[y, x, 2]:
@@ -63,7 +107,7 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
         return thickness
 
     def plane_row(x, y):
-        n = nrm[y, x, :3]
+        n = planes[y, x]
         if not _usable(n):
             return None
         p = pos[y, x, :3]
@@ -161,7 +205,7 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                     lo, hi = ranges[(i, j)]
                     za, zb = depth(t), depth(te)
                     if max(za, zb) >= lo and min(za, zb) <= hi:
-                        outcome, th = _texel(pos, nrm, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
+                        outcome, th = _texel(pos, planes, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
                                              plane_row, plane_depth, texel_thickness, depth)
                         if outcome == "blocked":
                             break
@@ -175,9 +219,9 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
     return out
 
 
-def _texel(pos, nrm, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, plane_depth,
+def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, plane_depth,
            texel_thickness, depth):
-    n = nrm[j, i, :3]
+    n = planes[j, i]
     if not _usable(n):
         return "hit", ta
     u = n / np.linalg.norm(n)

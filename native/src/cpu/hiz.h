@@ -39,7 +39,17 @@ struct HizCamera {
 };
 HizCamera hiz_camera(const Mat4& projection);
 
-// Per-texel thickness: back_position's view distance minus the front's where
+// The normal of each texel's tangent plane, for the pyramid's base and the
+// texel test (never the ray's direction, which follows the shading normal):
+// the surface's geometric normal from the position buffer, so that a normal
+// map does not tilt a flat surface into bumps. Per axis, the difference to
+// the seen neighbour whose view distance is closer to the texel's own (so a
+// silhouette does not bend it); the shading normal where an axis has no seen
+// neighbour or the texel none usable. xyz unit length, facing the side the
+// shading normal is on.
+Image hiz_plane_normals(const Image& position, const Image& normal, int threads);
+
+// `normal` holds the plane normals above. Per-texel thickness: back_position's view distance minus the front's where
 // a back surface is known and behind, else `thickness`.
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads);

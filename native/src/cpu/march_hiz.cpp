@@ -12,7 +12,7 @@
 // whole cell at a time and no interval of depth is ever jumped over.
 //
 // At a texel the surface is the texel's tangent plane (its position and
-// normal), not a flat depth: its depth range covers the texel's footprint, so
+// geometric normal, hiz_plane_normals()), not a flat depth: its depth range covers the texel's footprint, so
 // a wall seen at a grazing angle is continuous instead of a staircase, and a
 // hit is where the ray crosses that plane, to a fraction of a texel. A ray
 // that stays in front of the plane is no hit, which is what keeps a floor's
@@ -215,11 +215,12 @@ enum class TexelOutcome {
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
 // or it is behind the plane at the texel, where the texel's thickness says
 // whether that is solid. Being behind by no more than a rounding slack is a
-// crossing found one texel late, and counts as a hit.
-TexelOutcome texel_hit(const MarchSetup& s, const HizCamera& cam, const Image* back, const Ray& r,
-                       int i, int j, float ta, float tb, float& t_hit) {
+// crossing found one texel late, and counts as a hit. `planes`: the plane
+// normals (hiz_plane_normals()).
+TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera& cam, const Image* back,
+                       const Ray& r, int i, int j, float ta, float tb, float& t_hit) {
   const Image& position = *s.position;
-  const float* n = s.normal->px(i, j);
+  const float* n = planes.px(i, j);
   t_hit = ta;
   if (!normal_usable(n)) return TexelOutcome::Hit;  // no plane: the depth span decided
   const float* p = position.px(i, j);
@@ -237,7 +238,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizCamera& cam, const Image* b
   }
   // Behind from the start: how far, in view distance, at either end.
   float L[4];
-  if (!texel_plane(position, *s.normal, cam, i, j, L)) return TexelOutcome::Hit;
+  if (!texel_plane(position, planes, cam, i, j, L)) return TexelOutcome::Hit;
   const float thick = texel_thickness(position, back, s.opt.thickness, i, j);
   const float w = static_cast<float>(position.width), h = static_cast<float>(position.height);
   auto behind_by = [&](float t) {
@@ -253,8 +254,8 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizCamera& cam, const Image* b
   return TexelOutcome::Pass;
 }
 
-void march_hiz(const MarchSetup& s, const HizPyramid& pyr, const HizCamera& cam, const Image* back,
-               int x, int y, float out[4]) {
+void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, const HizCamera& cam,
+               const Image* back, int x, int y, float out[4]) {
   out[0] = out[1] = out[2] = out[3] = 0.0f;
   Ray r;
   if (!make_ray(s, x, y, r)) return;
@@ -282,7 +283,7 @@ void march_hiz(const MarchSetup& s, const HizPyramid& pyr, const HizCamera& cam,
         continue;
       }
       float th;
-      const TexelOutcome hit = texel_hit(s, cam, back, r, i, j, t, te, th);
+      const TexelOutcome hit = texel_hit(s, planes, cam, back, r, i, j, t, te, th);
       if (hit == TexelOutcome::Blocked) return;
       if (hit == TexelOutcome::Hit) {
         const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
@@ -358,14 +359,15 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   Image out(in.position.width, in.position.height);
   const HizCamera cam = hiz_camera(in.projection);
+  const Image planes = hiz_plane_normals(in.position, in.normal, threads);
   const HizPyramid pyr =
-      build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads);
+      build_hiz_pyramid(in.position, planes, in.back_position, cam, opt.thickness, threads);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
   const Image* spec = in.specular;
   parallel_rows(0, out.height, threads, [&](int y) {
     for (int x = 0; x < out.width; ++x) {
       if (spec && !is_reflective(spec->px(x, y))) continue;
-      march_hiz(setup, pyr, cam, in.back_position, x, y, out.px(x, y));
+      march_hiz(setup, planes, pyr, cam, in.back_position, x, y, out.px(x, y));
     }
   });
   return out;

@@ -88,7 +88,7 @@ class GlState {
   // changes, so a sequence of frames allocates once. Every pass uses the
   // same few slots, so a large frame's memory is given back as soon as a
   // smaller one runs.
-  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kSlots };
+  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kPlanes, kSlots };  // kPlanes: the hiz march's plane normals
 
   void release(Texture& t);
 

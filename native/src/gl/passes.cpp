@@ -59,6 +59,14 @@ void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, cons
                    const Texture& nrm, const Texture* back) {
   const int w = in.position.width, h = in.position.height;
   pyramid_target(w, h);
+  // The plane normals first: the base level and the walk read them.
+  const GLuint planes = program("hiz_planes.frag");
+  gl_.UseProgram(planes);
+  bind(planes, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(planes, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.Uniform2f(loc(planes, "u_size"), static_cast<float>(w), static_cast<float>(h));
+  attach(target(kPlanes, w, h, "the hiz plane normals", 1));
+  draw(w, h);
   const GLuint base = program("hiz_base.frag");
   gl_.UseProgram(base);
   bind(base, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -100,6 +108,7 @@ void GlState::bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture&
   // An unused sampler still needs a complete texture: the position stands in.
   bind(prog, "u_back", 3, back ? *back : pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
   gl_.Uniform1i(loc(prog, "u_has_back"), back ? 1 : 0);
+  bind(prog, "u_planes", 6, textures_[kPlanes], GL_NEAREST, GL_CLAMP_TO_EDGE);
 }
 
 Image GlState::reflection_color(const Image& uv, const Image& color) {

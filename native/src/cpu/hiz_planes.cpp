@@ -1,0 +1,82 @@
+// The hiz march's plane normals: each texel's geometric normal rebuilt from
+// the position buffer (hiz.h says the rule, docs/marches.md why). The GL
+// backend runs the same steps in shaders/hiz_planes.frag, in the same order.
+#include <cmath>
+
+#include "glint/stages.h"
+#include "hiz.h"
+#include "parallel.h"
+
+namespace glint::cpu {
+namespace {
+
+// The seen texel `k` steps from (x, y) along (ax, ay), or null.
+const float* neighbour(const Image& position, int x, int y, int ax, int ay, int k) {
+  const int nx = x + k * ax, ny = y + k * ay;
+  if (nx < 0 || ny < 0 || nx >= position.width || ny >= position.height) return nullptr;
+  const float* q = position.px(nx, ny);
+  return texel_seen(q) ? q : nullptr;
+}
+
+// How far the depth one side predicts for the texel misses its own: the line
+// through that side's two texels where both are seen, else its adjacent one.
+// The line is what tells a grazing floor's texel from the wall it meets: the
+// wall's base can be closer in depth than the floor's next texel.
+float miss(const float* p, const float* a1, const float* a2) {
+  return a2 ? std::fabs((2.0f * a1[2] - a2[2]) - p[2]) : std::fabs(a1[2] - p[2]);
+}
+
+// The difference along one axis: toward the seen neighbour whose side
+// predicts the texel's depth better (the high one on a tie), always from low
+// to high so both axes' differences keep one handedness. False when neither
+// neighbour is seen.
+bool axis_difference(const Image& position, const float* p, int x, int y, int ax, int ay, float e[3]) {
+  const float* lo = neighbour(position, x, y, ax, ay, -1);
+  const float* hi = neighbour(position, x, y, ax, ay, 1);
+  if (hi && lo &&
+      miss(p, lo, neighbour(position, x, y, ax, ay, -2)) < miss(p, hi, neighbour(position, x, y, ax, ay, 2)))
+    hi = nullptr;
+  if (hi) {
+    for (int k = 0; k < 3; ++k) e[k] = hi[k] - p[k];
+  } else if (lo) {
+    for (int k = 0; k < 3; ++k) e[k] = p[k] - lo[k];
+  } else {
+    return false;
+  }
+  return true;
+}
+
+void plane_normal(const Image& position, const Image& normal, int x, int y, float out[4]) {
+  const float* s = normal.px(x, y);
+  out[0] = s[0];
+  out[1] = s[1];
+  out[2] = s[2];
+  out[3] = 0.0f;
+  const float* p = position.px(x, y);
+  if (!texel_seen(p) || !(s[0] - s[0] == 0.0f && s[1] - s[1] == 0.0f && s[2] - s[2] == 0.0f) ||
+      (s[0] == 0.0f && s[1] == 0.0f && s[2] == 0.0f))
+    return;
+  float ex[3], ey[3];
+  if (!axis_difference(position, p, x, y, 1, 0, ex) || !axis_difference(position, p, x, y, 0, 1, ey)) return;
+  const float c[3] = {ex[1] * ey[2] - ex[2] * ey[1], ex[2] * ey[0] - ex[0] * ey[2], ex[0] * ey[1] - ex[1] * ey[0]};
+  const float len2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+  // Collinear neighbours, or differences too small or large for a float square.
+  if (!(len2 > 0.0f) || len2 - len2 != 0.0f) return;
+  float inv = 1.0f / std::sqrt(len2);
+  if (s[0] * c[0] + s[1] * c[1] + s[2] * c[2] < 0.0f) inv = -inv;
+  out[0] = c[0] * inv;
+  out[1] = c[1] * inv;
+  out[2] = c[2] * inv;
+}
+
+}  // namespace
+
+Image hiz_plane_normals(const Image& position, const Image& normal, int threads) {
+  Image out(position.width, position.height);
+  parallel_rows(0, position.height, threads, [&](int y) {
+    for (int x = 0; x < position.width; ++x) plane_normal(position, normal, x, y, out.px(x, y));
+  });
+  return out;
+}
+
+}  // namespace glint::cpu
