@@ -31,6 +31,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <set>
 #include <thread>
 
@@ -174,6 +175,96 @@ void read_projection(const Imf::Header& h, const std::string& path, ExrFile& out
                        a.typeName() + ", expected m44d (a 4x4 double matrix)");
   }
   out.projection = m;
+}
+
+// A file whose structure is broken: it fails while being read (glint::Error,
+// Python's RuntimeError), as OpenEXR's own parse errors do.
+[[noreturn]] void corrupt(const std::string& path, const std::string& problem) {
+  throw Error("cannot read EXR " + in_quotes(path) + ": " + problem);
+}
+
+// A NUL-terminated header string of at most 255 bytes (OpenEXR's longest name).
+bool read_header_string(std::FILE* f, std::string& out) {
+  out.clear();
+  for (int c; (c = std::fgetc(f)) != EOF;) {
+    if (c == 0) return true;
+    if (out.size() == 255) return false;
+    out.push_back(static_cast<char>(c));
+  }
+  return false;
+}
+
+// Bytes a value of a fixed-size attribute type takes; 0 for the types whose
+// size the file states (strings, vectors, unknown types) and -1 for chlist and
+// preview, which have their own layout.
+int fixed_attribute_size(const std::string& type) {
+  static const std::map<std::string, int> sizes = {
+      {"box2i", 16},         {"box2f", 16}, {"compression", 1}, {"lineOrder", 1}, {"envmap", 1},
+      {"deepImageState", 1}, {"int", 4},    {"float", 4},       {"double", 8},    {"v2i", 8},
+      {"v2f", 8},            {"v2d", 16},   {"v3i", 12},        {"v3f", 12},      {"v3d", 24},
+      {"m33f", 36},          {"m33d", 72},  {"m44f", 64},       {"m44d", 128},    {"chromaticities", 32},
+      {"keycode", 28},       {"rational", 8}, {"timecode", 8},  {"tiledesc", 9},  {"chlist", -1},
+      {"preview", -1}};
+  const auto it = sizes.find(type);
+  return it == sizes.end() ? 0 : it->second;
+}
+
+uint32_t read_u32(std::FILE* f, bool& ok) {
+  unsigned char b[4];
+  ok = ok && std::fread(b, 1, 4, f) == 4;
+  return uint32_t{b[0]} | uint32_t{b[1]} << 8 | uint32_t{b[2]} << 16 | uint32_t{b[3]} << 24;
+}
+
+// OpenEXR reads a header attribute by allocating the size the file declares
+// for it, before finding the file shorter: fuzz_exr found files of under 1 KB
+// that made read_exr take 2 GB and seconds before failing. OpenEXR also reads
+// fixed-size values and channel lists by their layout, not their declared
+// size, so a wrong size shifts where it reads the next attribute. The headers
+// (one, or one per part and an empty one after them) are walked here first:
+// every size must be what the type takes and fit in what the file has left.
+void check_header_sizes(std::FILE* f, const std::string& path) {
+  if (std::fseek(f, 0, SEEK_END) != 0) corrupt(path, "cannot be read to its end");
+  const int64_t file_size = std::ftell(f);
+  unsigned char version[4];
+  if (file_size < 8 || std::fseek(f, 4, SEEK_SET) != 0 || std::fread(version, 1, 4, f) != 4)
+    corrupt(path, "is shorter than an OpenEXR header");
+  const bool multipart = (version[1] & 0x10) != 0;  // flag bit 12 of the version field
+  std::string name, type, channel;
+  for (;;) {
+    bool any = false;
+    while (true) {
+      if (!read_header_string(f, name)) corrupt(path, "header ends early or holds a name over 255 bytes");
+      if (name.empty()) break;
+      any = true;
+      const std::string what = "header attribute " + in_quotes(name);
+      bool ok = read_header_string(f, type);
+      const int64_t size = static_cast<int32_t>(read_u32(f, ok));
+      if (!ok) corrupt(path, what + " ends early");
+      const int64_t start = std::ftell(f), left = file_size - start;
+      if (size < 0 || size > left)
+        corrupt(path, what + " declares " + std::to_string(size) + " bytes, but the file has " +
+                          std::to_string(left) + " left");
+      const int fixed = fixed_attribute_size(type);
+      if (fixed > 0 && size != fixed)
+        corrupt(path, what + " of type " + type + " declares " + std::to_string(size) +
+                          " bytes, expected " + std::to_string(fixed));
+      if (type == "chlist") {  // name, then type, pLinear, 3 reserved, x and y sampling
+        while (read_header_string(f, channel) && !channel.empty() && std::fseek(f, 16, SEEK_CUR) == 0) {
+        }
+        if (std::ftell(f) - start != size)
+          corrupt(path, what + " (a channel list) is not the " + std::to_string(size) +
+                            " bytes it declares");
+      } else if (type == "preview") {  // width, height, then 4 bytes a pixel
+        bool pok = true;
+        const uint64_t w = read_u32(f, pok), h = read_u32(f, pok);
+        if (!pok || size < 8 || w * h * 4 != static_cast<uint64_t>(size - 8))
+          corrupt(path, what + " (a preview image) is not the " + std::to_string(size) +
+                            " bytes it declares");
+      }
+      std::fseek(f, static_cast<long>(start + size), SEEK_SET);
+    }
+    if (!multipart || !any) return;
+  }
 }
 
 ExrFile read_exr_file(const std::string& path, double memory_limit_mb) {
@@ -323,13 +414,14 @@ ExrFile read_exr(const std::string& path, double memory_limit_mb) {
   {
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) bad_file(path, std::string("cannot be opened: ") + std::strerror(errno));
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, &std::fclose);
     unsigned char magic[4] = {0, 0, 0, 0};
     const size_t n = std::fread(magic, 1, 4, f);
-    std::fclose(f);
     // Every EXR starts with 76 2f 31 01; checking it first turns "some
     // other file" into a clear message instead of a library parse error.
     if (n != 4 || magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 || magic[3] != 0x01)
       bad_file(path, "is not an OpenEXR file (bad magic number)");
+    check_header_sizes(f, path);
   }
   try {
     return read_exr_file(path, memory_limit_mb);

@@ -12,6 +12,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "glint/exr.h"
@@ -153,6 +155,43 @@ TEST(MemoryBudget, ExrHeaderPromisingGigabytesIsRefused) {
     EXPECT_THROW(read_exr(path), MemoryLimitExceeded);
   }
   EXPECT_THROW(read_exr(path, 1024.0), MemoryLimitExceeded);
+  EXPECT_LT(peak_rss() - before, 64ull << 20);
+  std::filesystem::remove(path);
+}
+
+// fuzz_exr's finding: OpenEXR allocates the size a header attribute declares
+// before reading it, so 2 GB declared in a file of a few hundred bytes took
+// 2 GB and seconds before the read failed. The reader now checks every
+// declared size against the file first.
+TEST(MemoryBudget, ExrAttributeLargerThanTheFileIsRefusedWithoutAllocating) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("glint_attr_" + std::to_string(getpid()) + ".exr"))
+          .string();
+  ExrWriteOptions wo;
+  wo.options = "march=seed";
+  wo.compression = "none";
+  write_exr(path, {{"a", Image(2, 2, 1.0f)}}, wo);
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string key = std::string("glintOptions") + '\0' + "string" + '\0';
+  const size_t at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const uint32_t huge = 0x7ff00000u;  // 2 GiB, in a file of a few hundred bytes
+  for (int k = 0; k < 4; ++k) bytes[at + key.size() + k] = static_cast<char>((huge >> (8 * k)) & 0xff);
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << bytes;
+  }
+  const uint64_t before = peak_rss();
+  try {
+    read_exr(path);
+    FAIL() << "read a file whose header declares more bytes than it has";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("glintOptions"), std::string::npos) << e.what();
+  }
   EXPECT_LT(peak_rss() - before, 64ull << 20);
   std::filesystem::remove(path);
 }

@@ -10,6 +10,7 @@ from __future__ import annotations
 import resource
 import struct
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -164,3 +165,19 @@ def test_an_exr_header_promising_gigabytes_is_refused(glint, tmp_path):
     # Within its limit the same request is read (the data window, rest zero).
     with pytest.raises(glint.MemoryLimitExceeded):
         glint.read_exr(str(small), memory_limit_mb=0.001)
+
+
+REGRESSIONS = sorted((Path(__file__).resolve().parents[2] / "fuzz" / "corpus" / "exr").glob("regress_*.exr"))
+
+
+@pytest.mark.parametrize("path", REGRESSIONS, ids=[p.name for p in REGRESSIONS])
+def test_exr_fuzz_findings_fail_cleanly_without_allocating(glint, path):
+    """Files fuzz_exr found: under 1 KB each, their headers declare attribute sizes
+    OpenEXR allocated (about 2 GB) before finding the file shorter."""
+    assert path.stat().st_size < 1024
+    before = peak_rss()
+    t0 = time.perf_counter()
+    with pytest.raises(RuntimeError, match="header attribute"):
+        glint.read_exr(str(path))
+    assert time.perf_counter() - t0 < 1.0
+    assert peak_rss() - before < RSS_SLACK
