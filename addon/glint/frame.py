@@ -75,13 +75,14 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
     progress = Progress(0, report=progress_report, should_stop=should_stop, label="Glint export")
     try:
         with timings.measure("export"):
-            exp = gather.export_scene(depsgraph, progress)
+            exp = gather.export_scene(depsgraph, progress, max_distance=values["max_distance"])
         cam = exp.camera
         report.width, report.height = cam.width, cam.height
         report.objects, report.culled = exp.objects, exp.culled
+        report.message = exp.skipped_text()
         report.triangles = exp.triangles.count
         if not exp.any_reflective:
-            report.status, report.message = "skipped", "no reflective material in view"
+            report.status, report.message = "skipped", "no reflective material in view: no mesh exported, no trace"
             report.timings_ms = timings.ms
             return report
         requested = settings_logic.backend_name(values["backend"])
@@ -102,7 +103,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             report.reflective_pixels = int(np.count_nonzero(refl))
         report.backend = used
         if report.reflective_pixels == 0:
-            report.status, report.message = "skipped", "no reflective pixel on screen"
+            report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
             report.timings_ms = timings.ms
             return report
         if back_layer:
