@@ -98,7 +98,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
                                        lambda b: rasterize(core, exp, b, back_layer))
         progress.check()
         position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-        with timings.measure("images"):  # the mask is one of the compositor's images
+        with timings.measure("images"):  # which pixels reflect: counted, and the trace's input
             refl = compositing.reflective_mask(position, specular)
             report.reflective_pixels = int(np.count_nonzero(refl))
         report.backend = used
@@ -116,8 +116,9 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.backend = used
         progress.check()
         with timings.measure("images"):
-            images = {compositing.IMAGE_UV: compositing.uv_image(uv),
-                      compositing.IMAGE_MASK: compositing.mask_image(position, specular, refl)}
+            # The specular buffer is the mask as it is: the group's nodes take the
+            # amount and roughness from it (no per-pixel work here).
+            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_MASK: specular}
             view = values["debug_view"]
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
