@@ -82,13 +82,14 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
     progress = Progress(0, report=progress_report, should_stop=should_stop, label="Glint export")
     try:
         with timings.measure("export"):
-            exp = gather.export_scene(depsgraph, progress)
+            exp = gather.export_scene(depsgraph, progress, max_distance=values["max_distance"])
         cam = exp.camera
         report.width, report.height = cam.width, cam.height
         report.objects, report.culled = exp.objects, exp.culled
+        report.message = exp.skipped_text()
         report.triangles = exp.triangles.count
         if not exp.any_reflective:
-            report.status, report.message = "skipped", "no reflective material in view"
+            report.status, report.message = "skipped", "no reflective material in view: no mesh exported, no trace"
             report.timings_ms = timings.ms
             return report
         requested = settings_logic.backend_name(values["backend"])
@@ -104,12 +105,12 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
                                        lambda b: rasterize(core, exp, b, back_layer))
         progress.check()
         position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-        with timings.measure("images"):  # the mask is one of the compositor's images
+        with timings.measure("images"):  # which pixels reflect: counted, and the trace's input
             refl = compositing.reflective_mask(position, specular)
             report.reflective_pixels = int(np.count_nonzero(refl))
         report.backend = used
         if report.reflective_pixels == 0:
-            report.status, report.message = "skipped", "no reflective pixel on screen"
+            report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
             report.timings_ms = timings.ms
             return report
         if back_layer:
@@ -125,8 +126,9 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.backend = used
         progress.check()
         with timings.measure("images"):
-            images = {compositing.IMAGE_UV: compositing.uv_image(uv),
-                      compositing.IMAGE_MASK: compositing.mask_image(position, specular, refl)}
+            # The specular buffer is the mask as it is: the group's nodes take the
+            # amount and roughness from it (no per-pixel work here).
+            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_MASK: specular}
             view = values["debug_view"]
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)

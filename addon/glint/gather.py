@@ -308,8 +308,15 @@ class SceneExport:
     material_normal_map: np.ndarray  # [M] int32
     normal_maps: List[np.ndarray] = field(default_factory=list)
     objects: int = 0
-    culled: int = 0
+    culled: int = 0  # outside_view + out_of_reach
     any_reflective: bool = False
+    outside_view: int = 0  # bounding box wholly outside the frustum
+    out_of_reach: int = 0  # on screen, but no reflected ray can meet it
+
+    def skipped_text(self) -> str:
+        """What the export left out, for the log line."""
+        return (f"{self.outside_view} objects outside the view and {self.out_of_reach} out of the "
+                f"reflections' reach not exported")
 
 
 def _visible_instance(inst) -> bool:
@@ -341,37 +348,60 @@ def _instances_in_view(depsgraph, clip_from_world, table: MaterialTable):
             yield ob, m, [table.index_of(slot.material) for slot in ob.material_slots]
 
 
-def export_scene(depsgraph, progress=None) -> SceneExport:
+# Screen rectangles are grown by this many pixels before they are compared: a
+# march reads the pixel nearest its projected ray, up to a pixel off its line.
+REACH_MARGIN_PX = 4.0
+
+
+def reach_culling(cam: CameraInfo, boxes, reflective, max_distance: float):
+    """Which in-view objects no reflected ray can meet (``frustum.out_of_reach``):
+    ``boxes`` are their corners in view space, ``reflective`` whether a slot reflects."""
+    margin = 2.0 * REACH_MARGIN_PX / min(cam.width, cam.height)
+    proj = cam.projection
+    rects = [frustum.screen_rect(proj, c, margin) for c in boxes]
+    reach = [frustum.screen_rect(proj, frustum.grown_box_corners(c, max_distance), margin)
+             for c, refl in zip(boxes, reflective) if refl]
+    return frustum.out_of_reach(rects, reflective, reach)
+
+
+def export_scene(depsgraph, progress=None, max_distance: Optional[float] = None) -> SceneExport:
     """Every visible mesh instance in the camera's view, as view-space triangles.
 
     Two passes over the instances: the first (cheap: bounding boxes and material
-    slots) decides whether anything reflective is in view; only then does the
-    second fetch meshes. A scene without reflective materials costs one pass.
+    slots) decides whether anything reflective is in view and, with
+    ``max_distance``, which objects no reflected ray can meet; only then does the
+    second fetch meshes, of the objects that matter. A scene without reflective
+    materials costs one pass.
     """
     cam = camera(depsgraph)
     clip_from_world = cam.projection @ cam.view
     table = MaterialTable()
-    candidates = 0
     culled = 0
-    any_reflective = False
-    for _, _, slots in _instances_in_view(depsgraph, clip_from_world, table):
+    boxes, reflective = [], []
+    for ob, m, slots in _instances_in_view(depsgraph, clip_from_world, table):
         if slots is None:
             culled += 1
             continue
-        candidates += 1
-        if any(table.reflective(i) for i in slots):
-            any_reflective = True
+        boxes.append(frustum.transform_points(cam.view @ m, frustum.box_corners(ob.bound_box)))
+        reflective.append(any(table.reflective(i) for i in slots))
+    any_reflective = any(reflective)
+    skip = [False] * len(boxes)
+    if any_reflective and max_distance is not None:
+        skip = reach_culling(cam, boxes, reflective, max_distance)
+    out_of_reach = sum(skip)
     if progress is not None:
-        progress.total = candidates
+        progress.total = len(boxes) - out_of_reach
     result = SceneExport(cam, geometry.concatenate([]), table.array(), np.asarray(table.normal_map_of_row, np.int32),
-                         objects=candidates, culled=culled, any_reflective=any_reflective)
+                         objects=len(boxes) - out_of_reach, culled=culled + out_of_reach,
+                         any_reflective=any_reflective, outside_view=culled, out_of_reach=out_of_reach)
     if not any_reflective:
         return result
 
     parts: List[geometry.Triangles] = []
     cache: Dict[Tuple[int, Optional[str]], geometry.MeshArrays] = {}
+    in_view = iter(skip)
     for ob, m, slots in _instances_in_view(depsgraph, clip_from_world, table):
-        if slots is None:
+        if slots is None or next(in_view):
             continue
         uv_map = None
         for i in slots:

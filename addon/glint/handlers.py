@@ -143,7 +143,8 @@ def on_frame_change_post(scene, depsgraph=None, *args):
     if report.status == "ok":
         log(f"frame {report.frame}: reflections composited ({report.width}x{report.height}, "
             f"{report.triangles} triangles from {report.objects} objects, {report.culled} culled, "
-            f"{report.reflective_pixels} reflective pixels, backend {report.backend}; {t})")
+            f"{report.reflective_pixels} reflective pixels, backend {report.backend}; {t}; "
+            f"{report.message})")
     elif report.status == "skipped":
         log(f"frame {report.frame}: nothing to reflect: {report.message} ({t or 'no work'})")
     else:

@@ -91,6 +91,7 @@ def scene(h=12, w=16, seed=3):
     uv[..., 2] = rng.uniform(0, 1, (h, w)) * (rng.uniform(size=(h, w)) > 0.3)
     uv[..., 3] = uv[..., 2]
     seen = position[..., 3] > 0.5
+    spec[~seen] = 0  # as the rasterizer leaves pixels no triangle covers
     mask = cg.reflective_mask(position, spec)
     uv[~mask] = 0  # the trace reports nothing where it does not march
     return base, position, spec, uv, seen
@@ -106,7 +107,7 @@ def np_map_uv(image, uv_rgba):
 @pytest.mark.parametrize("size", [0, 1, 3])
 def test_group_computes_the_core_combine(size):
     base, position, spec, uv, seen = scene()
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: cg.mask_image(position, spec),
+    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec,
               cg.IMAGE_DEBUG: np.zeros_like(base), cg.IMAGE_POSITION: position,
               cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec}
     out = cg.evaluate_group(base, images, np_map_uv, box_clamp, size)
@@ -122,7 +123,7 @@ def test_nothing_reflective_leaves_the_base_bit_exact():
     base, position, spec, uv, seen = scene()
     spec[..., :3] = 0
     uv[:] = 0
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: cg.mask_image(position, spec),
+    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec,
               cg.IMAGE_DEBUG: base, cg.IMAGE_POSITION: position, cg.IMAGE_NORMAL: base, cg.IMAGE_SPECULAR: spec}
     out = cg.evaluate_group(base, images, np_map_uv, box_clamp, 2)
     assert np.array_equal(out["Image"], base)
@@ -131,7 +132,7 @@ def test_nothing_reflective_leaves_the_base_bit_exact():
 def test_debug_switches():
     base, position, spec, uv, seen = scene()
     dbg = np.full_like(base, 0.25)
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: cg.mask_image(position, spec), cg.IMAGE_DEBUG: dbg,
+    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec, cg.IMAGE_DEBUG: dbg,
               cg.IMAGE_POSITION: position, cg.IMAGE_NORMAL: base, cg.IMAGE_SPECULAR: spec}
     refl = cg.evaluate_group(base, images, np_map_uv, box_clamp, 1, debug_view="REFLECTION")
     assert np.array_equal(refl["Image"], refl["Reflection"])
@@ -148,7 +149,7 @@ def test_group_matches_glint_core_stages(core):
     masked_spec = np.where(cg.reflective_mask(position, spec)[..., None], spec, 0).astype(np.float32)
     refl = core.reflection(color, blurred, masked_spec)
     want = core.combine(base, refl)
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: cg.mask_image(position, spec),
+    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec,
               cg.IMAGE_DEBUG: base, cg.IMAGE_POSITION: position, cg.IMAGE_NORMAL: base, cg.IMAGE_SPECULAR: spec}
     out = cg.evaluate_group(base, images, lambda img, uvi: core.reflection_color(np.ascontiguousarray(uvi), img),
                             lambda img, s: core.box_blur(np.ascontiguousarray(img), size=s), size)
@@ -160,11 +161,7 @@ def test_mask_and_uv_images():
     position[0, :, 3] = (1, 1, 0, 1)
     position[0, 3, 0] = np.nan
     spec = np.array([[[0.3, 0.6, 0.9, 0.25], [0, 0, 0, 1], [1, 1, 1, 1], [1, 1, 1, 1]]], np.float32)
-    m = cg.mask_image(position, spec)
-    assert np.allclose(m[0, 0], (0.6, 0.75, 0, 1))
-    assert np.array_equal(m[0, 1], (0, 0, 0, 1))  # not reflective
-    assert np.array_equal(m[0, 2], (0, 0, 0, 1))  # not seen
-    assert np.array_equal(m[0, 3], (0, 0, 0, 1))  # non-finite position
+    assert np.array_equal(cg.reflective_mask(position, spec)[0], (True, False, False, False))
     n = np.ones((1, 4, 4), np.float32)
     assert np.array_equal(cg.trace_normals(n, position, spec)[0, :, 0], (1, 0, 0, 0))
     uv = np.full((1, 4, 4), 0.5, np.float32)

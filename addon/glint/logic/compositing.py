@@ -13,7 +13,9 @@ the reflected uv, not the colour: it hands the compositor two images
 
     UV image   = (u, v, vis, 1)        Map UV's UV input: it samples at (u, v)
                                        and premultiplies by the third channel
-    mask image = (amount, r, 0, 1)
+    mask image = the specular buffer   (r, g, b, shininess / 127.75) as the
+                                       rasterizer made it (zero where nothing is
+                                       seen); the nodes take amount and r from it
 
 and :data:`GROUP_NODES` / :data:`GROUP_LINKS` compute ``out`` with Blender's
 own nodes (Map UV, a Flat blur, Mix and Math), in the core's order of
@@ -83,6 +85,13 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "sep_blur": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
     "sep_mask": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
     "sep_uv": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    # amount = mean(spec.rgb), r = 1 - clamp(spec.a, 0, 1): the mask image is the
+    # rasterizer's specular buffer itself, handed over without a copy.
+    "amount_rg": ("CompositorNodeMath", {"operation": "ADD", "use_clamp": False}, {}),
+    "amount_rgb": ("CompositorNodeMath", {"operation": "ADD", "use_clamp": False}, {}),
+    "amount": ("CompositorNodeMath", {"operation": "DIVIDE", "use_clamp": False}, {1: 3.0}),
+    # 1 - a clamped to [0, 1] is 1 - clamp(a, 0, 1) for every a.
+    "rough": ("CompositorNodeMath", {"operation": "SUBTRACT", "use_clamp": True}, {0: 1.0}),
     "mix_rough": ("CompositorNodeMixRGB", {"blend_type": "MIX", "use_alpha": False, "use_clamp": False}, {}),
     "refl_rgb": ("CompositorNodeMixRGB", {"blend_type": "MULTIPLY", "use_alpha": False, "use_clamp": False},
                  {0: 1.0}),
@@ -115,22 +124,28 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("blur", 0, "sep_blur", 0),
     ("mask_image", 0, "sep_mask", 0),
     ("uv_image", 0, "sep_uv", 0),
+    ("sep_mask", 0, "amount_rg", 0),
+    ("sep_mask", 1, "amount_rg", 1),
+    ("amount_rg", 0, "amount_rgb", 0),
+    ("sep_mask", 2, "amount_rgb", 1),
+    ("amount_rgb", 0, "amount", 0),
+    ("sep_mask", 3, "rough", 1),
     # rgb: mix(C, B, r) * amount
-    ("sep_mask", 1, "mix_rough", 0),
+    ("rough", 0, "mix_rough", 0),
     ("map_uv", 0, "mix_rough", 1),
     ("blur", 0, "mix_rough", 2),
     ("mix_rough", 0, "refl_rgb", 1),
-    ("sep_mask", 0, "refl_rgb", 2),
+    ("amount", 0, "refl_rgb", 2),
     # alpha: (C.a (1 - r) + B.a r) * amount, clamped to [0, 1]
-    ("sep_mask", 1, "one_minus_rough", 1),
+    ("rough", 0, "one_minus_rough", 1),
     ("sep_color", 3, "c_alpha", 0),
     ("one_minus_rough", 0, "c_alpha", 1),
     ("sep_blur", 3, "b_alpha", 0),
-    ("sep_mask", 1, "b_alpha", 1),
+    ("rough", 0, "b_alpha", 1),
     ("c_alpha", 0, "mixed_alpha", 0),
     ("b_alpha", 0, "mixed_alpha", 1),
     ("mixed_alpha", 0, "refl_alpha", 0),
-    ("sep_mask", 0, "refl_alpha", 1),
+    ("amount", 0, "refl_alpha", 1),
     # over: base * (1 - a) + refl.rgb
     ("refl_alpha", 0, "one_minus_alpha", 1),
     (GROUP_IN, 0, "base_scaled", 1),
@@ -195,14 +210,6 @@ def specular_amount(specular: np.ndarray) -> np.ndarray:
     return amount
 
 
-def roughness(specular: np.ndarray) -> np.ndarray:
-    """1 - clamp(shininess alpha, 0, 1); a non-finite alpha reads as a mirror."""
-    a = np.asarray(specular, dtype=np.float32)[..., 3]
-    r = np.float32(1.0) - np.clip(a, 0.0, 1.0)
-    r[~np.isfinite(a)] = 0.0
-    return r.astype(np.float32, copy=False)
-
-
 def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
     """Pixels the core would trace: seen (w = 1, finite) with a positive specular amount."""
     p = np.asarray(position, dtype=np.float32)
@@ -215,19 +222,6 @@ def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
     seen &= np.isfinite(total)
     seen &= specular_amount(specular) > 0
     return seen
-
-
-def mask_image(position: np.ndarray, specular: np.ndarray, refl: np.ndarray = None) -> np.ndarray:
-    """(amount, roughness, 0, 1) where reflective, (0, 0, 0, 1) elsewhere. ``refl``:
-    :func:`reflective_mask`, when the caller has it already."""
-    h, w = np.asarray(specular).shape[:2]
-    if refl is None:
-        refl = reflective_mask(position, specular)
-    out = np.zeros((h, w, 4), np.float32)
-    np.copyto(out[..., 0], specular_amount(specular), where=refl)
-    np.copyto(out[..., 1], roughness(specular), where=refl)
-    out[..., 3] = 1.0
-    return out
 
 
 def trace_normals(normal: np.ndarray, position: np.ndarray, specular: np.ndarray,
@@ -398,7 +392,8 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                 a = np.asarray(inp(node, 0), np.float32)
                 b = np.asarray(inp(node, 1), np.float32)
                 op = props["operation"]
-                value = {"ADD": lambda: a + b, "SUBTRACT": lambda: a - b, "MULTIPLY": lambda: a * b}[op]()
+                value = {"ADD": lambda: a + b, "SUBTRACT": lambda: a - b, "MULTIPLY": lambda: a * b,
+                         "DIVIDE": lambda: a / b}[op]()
                 if props["use_clamp"]:
                     value = np.clip(value, 0.0, 1.0)
                 value = np.broadcast_to(value, shape[:-1]).astype(np.float32)
