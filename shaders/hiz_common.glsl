@@ -12,6 +12,8 @@ const float FOOTPRINT_SPREAD = 0.5;
 const float PLANE_TOLERANCE = 1e-5;
 const float BEHIND_SLACK = 1e-3;
 const float CELL_NUDGE = 1.0 / 64.0;
+const float EDGE_FADE = 0.075;
+const float UNCERTAIN = 0.5;
 
 bool normal_usable(vec3 n) { return finite_v3(n) && (n.x != 0.0 || n.y != 0.0 || n.z != 0.0); }
 

@@ -2,7 +2,8 @@
 // The "hiz" march: the Hi-Z pyramid (hiz_base.frag, hiz_reduce.frag) walked
 // cell by cell along the reflected ray's screen-space line. A port of
 // march_hiz() in native/src/cpu/march_hiz.cpp, which explains each step;
-// same operations in the same order. Output: (u, v, 1, 1) at a hit, else 0.
+// same operations in the same order. Output: (u, v, visibility, visibility) at a
+// hit (its confidence times the fade at the screen's edge), else 0.
 #include "common.glsl"
 #include "fragment.glsl"
 #include "trace_common.glsl"
@@ -107,11 +108,13 @@ const int PASS = 0;
 const int HIT = 1;
 const int BLOCKED = 2;
 
-int texel_hit(ivec2 c, float ta, float tb, out float t_hit) {
-  vec3 n = texelFetch(u_planes, c, 0).xyz;
+// n, p: the texel's plane normal (u_planes) and position, for the outline test after a hit.
+int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, out vec3 n, out vec3 p) {
+  n = texelFetch(u_planes, c, 0).xyz;
+  p = texelFetch(u_position, c, 0).xyz;
   t_hit = ta;
+  located = false;
   if (!normal_usable(n)) return HIT;
-  vec3 p = texelFetch(u_position, c, 0).xyz;
   precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
   precise vec3 u = vec3(n.x * inv, n.y * inv, n.z * inv);
   precise float np = u.x * p.x + u.y * p.y + u.z * p.z;
@@ -129,6 +132,7 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit) {
     f = 1.0 < f ? 1.0 : f;
     precise float th = ta + (tb - ta) * f;
     t_hit = th;
+    located = true;
     return HIT;
   }
   vec4 L;
@@ -140,7 +144,10 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit) {
   precise float sxa = (g_f0.x + ta * g_d.x) * sxs - 1.0;
   precise float sya = (g_f0.y + ta * g_d.y) * sys - 1.0;
   precise float da = ray_depth(ta) - plane_depth(L, sxa, sya);
-  if (da <= slack) return HIT;
+  if (da <= slack) {
+    located = true;
+    return HIT;
+  }
   if (da <= thick) return BLOCKED;
   if (b_behind) {
     precise float sxb = (g_f0.x + tb * g_d.x) * sxs - 1.0;
@@ -149,6 +156,31 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit) {
     if (db <= thick) return BLOCKED;
   }
   return PASS;
+}
+
+// on_outline() and hit_visibility() in march_hiz.cpp.
+bool on_outline(ivec2 c, vec3 p, vec3 n) {
+  float th = texel_thickness(c, -p.z);
+  precise float lim = -th * sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  ivec2 nb[4] = ivec2[4](c - ivec2(1, 0), c + ivec2(1, 0), c - ivec2(0, 1), c + ivec2(0, 1));
+  bool outline = false;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 q = nb[k];
+    if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) continue;
+    vec4 o = texelFetch(u_position, q, 0);
+    precise float g = n.x * (o.x - p.x) + n.y * (o.y - p.y) + n.z * (o.z - p.z);
+    if (!texel_seen(o) || g < lim) outline = true;
+  }
+  return outline;
+}
+
+float hit_visibility(float u, float v, bool certain) {
+  precise float edge = min(min(u, 1.0 - u), min(v, 1.0 - v));
+  precise float fade = edge / EDGE_FADE;
+  fade = fade < 0.0 ? 0.0 : fade;
+  fade = 1.0 < fade ? 1.0 : fade;
+  precise float vis = (certain ? 1.0 : UNCERTAIN) * fade;
+  return vis;
 }
 
 void main() {
@@ -162,6 +194,11 @@ void main() {
   float bt = ray_b(t);
   int level = 0;
   int it = 0;
+  bool hit = false;
+  ivec2 hit_c;
+  float hit_t;
+  bool hit_located;
+  vec3 hit_n, hit_p;
   // The walk stops at each level-0 texel that may meet the ray and the
   // texel's test runs outside the walk's loop: a SIMD rasterizer such as
   // llvmpipe runs the body of a loop for all lanes whenever any lane needs
@@ -203,14 +240,18 @@ void main() {
     }
     if (!test) return;
     float th;
-    int outcome = texel_hit(c, t, te, th);
+    bool located;
+    vec3 n, p;
+    int outcome = texel_hit(c, t, te, th, located, n, p);
     if (outcome == BLOCKED) return;
     if (outcome == HIT) {
-      precise float u = (g_f0.x + th * g_d.x) / u_size.x;
-      precise float v = (g_f0.y + th * g_d.y) / u_size.y;
-      if (!finite_f(u) || !finite_f(v)) return;
-      out_uv = vec4(u, v, 1.0, 1.0);
-      return;
+      hit = true;
+      hit_c = c;
+      hit_t = th;
+      hit_located = located;
+      hit_n = n;
+      hit_p = p;
+      break;
     }
     t = te;
     nt = ne;
@@ -218,4 +259,13 @@ void main() {
     if (level < top) ++level;
     ++it;
   }
+  // Outside the loops for the same reason: the outline test's five fetches
+  // run once per pixel, not once per texel test of any lane.
+  if (!hit) return;
+  precise float u = (g_f0.x + hit_t * g_d.x) / u_size.x;
+  precise float v = (g_f0.y + hit_t * g_d.y) / u_size.y;
+  if (!finite_f(u) || !finite_f(v)) return;
+  bool certain = hit_located && !on_outline(hit_c, hit_p, hit_n);
+  float vis = hit_visibility(u, v, certain);
+  out_uv = vec4(u, v, vis, vis);
 }

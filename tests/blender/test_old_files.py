@@ -84,3 +84,15 @@ def test_the_panel_says_what_was_turned_on_and_off_restores_it(old_files, blende
     assert "Glint turned on Post Processing > Compositing for its reflections" in labels, labels
     # Switching Glint off again gives the file its own settings back.
     assert "AFTER True False" in log, log[-2000:]
+
+
+def test_compositing_switched_off_after_enabling_is_turned_on_at_render_init(samples, reference, blender, tmp_path):
+    """Compositing unticked by hand after Glint was enabled (no update runs then):
+    render_init turns it on for this very render."""
+    out = str(tmp_path / "out")
+    log = blender.render(samples["mirror_floor"], out, dict(
+        CONFIG, python="bpy.context.scene.render.use_compositing = False"))
+    assert "turned on Output Properties > Post Processing > Compositing" in log, log[-3000:]
+    assert "Glint: frame 1: reflections composited" in log
+    img = read_exr(os.path.join(out, "frame_0001.exr"))
+    assert np.abs(img[..., :3] - reference[..., :3]).mean() < 1e-3

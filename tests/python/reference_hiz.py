@@ -22,6 +22,8 @@ CELL_NUDGE = 1.0 / 64.0
 PLANE_TOLERANCE = 1e-5
 BEHIND_SLACK = 1e-3
 FOOTPRINT_SPREAD = 0.5
+EDGE_FADE = 0.075   # share of the screen over which visibility fades at its edges
+UNCERTAIN = 0.5     # confidence of a hit located only to its texel, or on an outline
 
 
 def _seen(p):
@@ -138,6 +140,17 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
 
     ranges = {}
 
+    def on_outline(x, y):
+        """A neighbour across an edge is unseen or behind the texel's plane by more than
+        its thickness: the plane overhangs the object there."""
+        p, n = pos[y, x, :3], planes[y, x]
+        lim = -texel_thickness(x, y) * np.linalg.norm(n)
+        for qx, qy in ((x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)):
+            if 0 <= qx < w and 0 <= qy < h:
+                if not _seen(pos[qy, qx]) or n @ (pos[qy, qx, :3] - p) < lim:
+                    return True
+        return False
+
     def near_ok(v):
         c = P @ np.append(v, 1.0)
         return c[2] + c[3] >= 0 and c[3] > 0
@@ -209,13 +222,17 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                                              plane_row, plane_depth, texel_thickness, depth)
                         if outcome == "blocked":
                             break
-                        if outcome == "hit":
-                            result = th
+                        if outcome in ("hit", "hit on plane"):
+                            certain = outcome == "hit on plane" and not on_outline(i, j)
+                            result = th, certain
                             break
                 t = te
             if result is not None:
-                q = f0 + result * d
-                out[y, x] = (q[0] / w, q[1] / h, 1.0, 1.0)
+                q = f0 + result[0] * d
+                u, v = q[0] / w, q[1] / h
+                fade = min(max(min(u, 1.0 - u, v, 1.0 - v) / EDGE_FADE, 0.0), 1.0)
+                vis = (1.0 if result[1] else UNCERTAIN) * fade
+                out[y, x] = (u, v, vis, vis)
     return out
 
 
@@ -241,7 +258,7 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
         return "pass", ta
     if not a_behind:
         f = min(max(ga / (ga - gb), 0.0), 1.0)
-        return "hit", ta + (tb - ta) * f
+        return "hit on plane", ta + (tb - ta) * f
     L = plane_row(i, j)
     if L is None:
         return "hit", ta
@@ -254,7 +271,7 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     slack = BEHIND_SLACK * abs(p[2])
     da = behind_by(ta)
     if da <= slack:
-        return "hit", ta
+        return "hit on plane", ta
     if da <= thick:
         return "blocked", ta
     if b_behind and behind_by(tb) <= thick:

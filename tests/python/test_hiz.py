@@ -53,11 +53,48 @@ def test_agrees_with_the_float64_reference(name, back, bump):
     core = glint_core.trace(gb["position"], nrm, gb["projection"], march="hiz", steps=64, **kw)
     ref = reference_hiz(gb["position"], nrm, gb["projection"], **kw)
     both = (core[..., 2] > 0) == (ref[..., 2] > 0)
-    close = np.where(ref[..., 2] > 0, np.abs(core[..., :2] - ref[..., :2]).max(axis=-1) < 1e-3, True)
+    # uv and visibility (confidence times the edge fade) alike
+    close = np.where(ref[..., 2] > 0, np.abs(core[..., :3] - ref[..., :3]).max(axis=-1) < 1e-3, True)
     share = (both & close).mean()
-    print(f"hiz {name} back={back} bump={bump}: {share * 100:.2f}% agree, {int((ref[..., 2] > 0).sum())} hits")
+    uncertain = int(((ref[..., 2] > 0) & (ref[..., 2] < 0.999)).sum())
+    print(f"hiz {name} back={back} bump={bump}: {share * 100:.2f}% agree, {int((ref[..., 2] > 0).sum())} hits, "
+          f"{uncertain} below full visibility")
     assert (ref[..., 2] > 0).sum() > 30, "the scene should reflect something"
     assert share >= 0.99
+
+
+EDGE_FADE = 0.075  # docs/marches.md: visibility fades over this share of the screen at its edges
+
+
+@pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
+def test_visibility_is_confidence_times_the_edge_fade(name):
+    """A mirror does not fade with the distance a ray travelled: away from the screen's
+    edges a correct hit has visibility 1 however far it is, or 0.5 where it is located only
+    to its texel or on an outline (rare on these smooth scenes); within EDGE_FADE of an edge
+    it fades linearly to 0."""
+    gb, mh, _ = data(name, 160, 120)
+    uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"],
+                          **glint_core.presets()["balanced"])
+    h, w = uv.shape[:2]
+    rep = uv[..., 2] > 0
+    assert np.array_equal(uv[..., 2], uv[..., 3])
+    u, v = uv[..., 0], uv[..., 1]
+    fade = np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
+    conf = np.where(rep, uv[..., 2] / np.maximum(fade, 1e-9), 0)
+    sure = rep & (fade > 0.05)
+    assert np.all((np.abs(conf[sure] - 1) < 1e-4) | (np.abs(conf[sure] - 0.5) < 1e-4))
+    # correct hits: the exact mirror hit is visible and within 1.5 px
+    err = np.hypot((u - mh["uv"][..., 0]) * w, (v - mh["uv"][..., 1]) * h)
+    good = sure & mh["visible"] & (err <= 1.5)
+    full = good & (fade == 1)
+    assert full.sum() > 100
+    assert (np.abs(conf[full] - 1) < 1e-4).mean() >= 0.9
+    # no fade with distance: the longest quarter of the rays is as visible as the rest
+    ray = mh["distance"]
+    far = full & (ray >= np.quantile(ray[full], 0.75))
+    assert far.sum() > 20 and (np.abs(conf[far] - 1) < 1e-4).mean() >= 0.9
+    print(f"hiz {name}: {rep.sum()} hits, {(fade[rep] < 1).sum()} in the edge margin, "
+          f"{(np.abs(conf[sure] - 0.5) < 1e-4).sum()} at confidence 0.5")
 
 
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])

@@ -117,7 +117,7 @@ def backend_name(enum_value: str) -> str:
 
 
 # Auto's rule (docs/addon.md, "Which backend Auto picks"). Measured with
-# bench/frame_bench.py and a core-only sweep side by side, on 2 cores with Mesa's
+# bench/frame_bench.py and bench/backend_sweep.py side by side, on 2 cores with Mesa's
 # llvmpipe as the only GL: the CPU rasterized and traced faster at every size
 # and triangle count tried (320x240 to 3840x2160, 144 to 400k triangles), and
 # GL's first use in a process costs ~0.2 s more (its context). Without a GPU,

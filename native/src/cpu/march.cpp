@@ -57,7 +57,9 @@ void onscreen_range(double sx, double sy, double ix, double iy, int64_t n, doubl
   auto clip_axis = [&](double s0, double inc, double size) {
     const double a = -1.0, b = size + 1.0;
     if (inc == 0.0) {
-      if (s0 < a || s0 > b) hi = lo - 1.0;
+      // Empty. Not lo - 1: past 2^53 that equals lo, and the range read as
+      // non-empty with bounds no int64 holds (found by fuzz_trace).
+      if (s0 < a || s0 > b) hi = 0.0;  // lo >= 1 always
       return;
     }
     double t0 = (a - s0) / inc, t1 = (b - s0) / inc;

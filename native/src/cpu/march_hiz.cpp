@@ -44,6 +44,13 @@ constexpr float kPlaneTolerance = 1e-5f;
 // view distance crossed the surface in the previous texel's footprint (each
 // texel has its own plane, so the crossing can fall between two of them).
 constexpr float kBehindSlack = 1e-3f;
+// Visibility (docs/marches.md): how well a hit is located, times a fade over
+// this share of the screen at its edges (Eevee's default edge fading). A hit
+// found on its texel's plane, off any outline, has confidence 1; one located
+// only to its texel (no usable normal, or a plane seen edge-on) or on an
+// outline texel, whose plane may extend past the object, kUncertain.
+constexpr float kEdgeFade = 0.075f;
+constexpr float kUncertain = 0.5f;
 // A texel's footprint range is clamped to its centre +- this share of its
 // view distance (plus its thickness): a plane seen edge-on would otherwise
 // reach infinity and make every cell above it overlap every ray.
@@ -216,12 +223,14 @@ enum class TexelOutcome {
 // or it is behind the plane at the texel, where the texel's thickness says
 // whether that is solid. Being behind by no more than a rounding slack is a
 // crossing found one texel late, and counts as a hit. `planes`: the plane
-// normals (hiz_plane_normals()).
+// normals (hiz_plane_normals()). `located`: the hit was found on the texel's
+// plane (else only to the texel).
 TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera& cam, const Image* back,
-                       const Ray& r, int i, int j, float ta, float tb, float& t_hit) {
+                       const Ray& r, int i, int j, float ta, float tb, float& t_hit, bool& located) {
   const Image& position = *s.position;
   const float* n = planes.px(i, j);
   t_hit = ta;
+  located = false;
   if (!normal_usable(n)) return TexelOutcome::Hit;  // no plane: the depth span decided
   const float* p = position.px(i, j);
   const float inv = 1.0f / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -234,6 +243,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera
   if (!a_behind) {
     const float f = ga / (ga - gb);  // G is linear in t: its zero, in [0, 1]
     t_hit = ta + (tb - ta) * std::min(std::max(f, 0.0f), 1.0f);
+    located = true;
     return TexelOutcome::Hit;
   }
   // Behind from the start: how far, in view distance, at either end.
@@ -248,10 +258,40 @@ TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera
   };
   const float slack = kBehindSlack * std::fabs(p[2]);
   const float da = behind_by(ta);
-  if (da <= slack) return TexelOutcome::Hit;
+  if (da <= slack) {
+    located = true;  // on the plane, to the rounding slack
+    return TexelOutcome::Hit;
+  }
   if (da <= thick) return TexelOutcome::Blocked;
   if (b_behind && behind_by(tb) <= thick) return TexelOutcome::Blocked;
   return TexelOutcome::Pass;
+}
+
+// Texel (i, j) lies on an object's outline: a neighbour across one of its
+// edges is unseen or lies behind the texel's plane by more than its
+// thickness. Its plane then covers its whole footprint although the object
+// covers only part of it, so a hit there may belong to what lies beyond.
+bool on_outline(const Image& position, const Image& normal, const Image* back, float thickness, int i,
+                int j) {
+  const float* p = position.px(i, j);
+  const float* n = normal.px(i, j);
+  const float th = texel_thickness(position, back, thickness, i, j);
+  const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+  for (const auto& q : nb) {
+    if (q[0] < 0 || q[1] < 0 || q[0] >= position.width || q[1] >= position.height) continue;
+    const float* o = position.px(q[0], q[1]);
+    if (!texel_seen(o)) return true;
+    const float g = n[0] * (o[0] - p[0]) + n[1] * (o[1] - p[1]) + n[2] * (o[2] - p[2]);
+    if (g < -th * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) return true;
+  }
+  return false;
+}
+
+// Confidence times the fade at the screen's edges, for a hit at (u, v).
+inline float hit_visibility(float u, float v, bool certain) {
+  const float edge = std::min(std::min(u, 1.0f - u), std::min(v, 1.0f - v));
+  const float fade = std::min(std::max(edge / kEdgeFade, 0.0f), 1.0f);
+  return (certain ? 1.0f : kUncertain) * fade;
 }
 
 void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, const HizCamera& cam,
@@ -283,15 +323,17 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
         continue;
       }
       float th;
-      const TexelOutcome hit = texel_hit(s, planes, cam, back, r, i, j, t, te, th);
+      bool located;
+      const TexelOutcome hit = texel_hit(s, planes, cam, back, r, i, j, t, te, th, located);
       if (hit == TexelOutcome::Blocked) return;
       if (hit == TexelOutcome::Hit) {
         const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
         const float v = (r.f0[1] + th * r.d[1]) / static_cast<float>(pos.height);
         if (!finite(u) || !finite(v)) return;
+        const bool certain = located && !on_outline(pos, planes, back, s.opt.thickness, i, j);
         out[0] = u;
         out[1] = v;
-        out[2] = out[3] = 1.0f;
+        out[2] = out[3] = hit_visibility(u, v, certain);
         return;
       }
     }
