@@ -6,14 +6,14 @@
 #include "fragment.glsl"
 
 uniform sampler2D u_src;
-uniform ivec4 u_src_size;  // (width, height) of the level below; z, w unused
+uniform ivec4 u_sizes;  // (width, height) of the level below; this level's width, height
 
 layout(location = 0) out vec4 out_color;
 
 void main() {
   ivec2 px = pixel_coord();
-  int x0 = 2 * px.x, x1 = min(2 * px.x + 1, u_src_size.x - 1);
-  int y0 = 2 * px.y, y1 = min(2 * px.y + 1, u_src_size.y - 1);
+  int x0 = 2 * px.x, x1 = min(2 * px.x + 1, u_sizes.x - 1);
+  int y0 = 2 * px.y, y1 = min(2 * px.y + 1, u_sizes.y - 1);
   vec4 a = texelFetch(u_src, ivec2(x0, y0), 0);
   vec4 b = texelFetch(u_src, ivec2(x1, y0), 0);
   vec4 c = texelFetch(u_src, ivec2(x0, y1), 0);

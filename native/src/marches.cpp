@@ -1,4 +1,4 @@
-// The table of marches (glint/marches.h) and the input checks every trace
+// The table of marches (glint/marches.h) and the input checks every stage
 // passes through, whichever backend runs it.
 #include "glint/marches.h"
 
@@ -103,6 +103,20 @@ void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
   if (info.needs_mesh && !in.mesh)
     throw InvalidArgument("mesh", std::string("march \"") + info.name +
                                       "\" traces the scene's triangles: pass mesh=(vertices, triangles)");
+}
+
+void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
+                                    const Mat4& projection) {
+  require_image(position, "position");
+  require_same_size(position, "position", normal, "normal");
+  require_same_size(position, "position", specular, "specular");
+  validate_projection(projection);
+}
+
+void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular) {
+  require_image(color, "reflection_color");
+  require_same_size(color, "reflection_color", uv, "uv");
+  require_same_size(color, "reflection_color", specular, "specular");
 }
 
 }  // namespace glint

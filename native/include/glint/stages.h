@@ -148,6 +148,10 @@ void require_image(const Image& img, const char* name);
 void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name);
 // Everything Backend::trace checks before it runs: buffer sizes, options, projection.
 void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt);
+// What Backend::specular_weight and Backend::cone_blur check, on every backend.
+void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
+                                    const Mat4& projection);
+void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular);
 // The checks every backend's reflection / combine make before they run.
 void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,
                                const Image* weight);

@@ -215,17 +215,12 @@ class CpuBackend final : public Backend {
 
   Image specular_weight(const Image& position, const Image& normal, const Image& specular,
                         const Mat4& projection) override {
-    require_image(position, "position");
-    require_same_size(position, "position", normal, "normal");
-    require_same_size(position, "position", specular, "specular");
-    validate_projection(projection);
+    require_specular_weight_inputs(position, normal, specular, projection);
     return cpu::specular_weight(position, normal, specular, projection, threads_);
   }
 
   Image cone_blur(const Image& color, const Image& uv, const Image& specular) override {
-    require_image(color, "reflection_color");
-    require_same_size(color, "reflection_color", uv, "uv");
-    require_same_size(color, "reflection_color", specular, "specular");
+    require_cone_blur_inputs(color, uv, specular);
     return cpu::cone_blur(color, uv, specular, threads_);
   }
 

@@ -59,6 +59,11 @@ class GlState {
   void pyramid_target(int w, int h);
 
   void attach_level(GLuint tex, int level);
+  // Levels 1..levels-1 of `tex`, each drawn by `reduce` from the level below
+  // (u_src on unit 5, u_sizes = source w, h, this level's w, h) while that
+  // level is the only one visible, so no pass samples what it writes; then
+  // every level is made visible again.
+  void reduce_levels(GLuint tex, int levels, GLuint reduce, int w, int h);
 
   Image reflection_color(const Image& uv, const Image& color);
 

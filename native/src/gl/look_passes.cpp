@@ -87,29 +87,8 @@ Image GlState::cone_blur(const Image& color, const Image& uv, const Image& specu
   gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
   gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, color.data.data());
 
-  // Each level from the one below, which is the texture's only visible
-  // level while it is read, so no pass samples what it writes.
-  const GLuint reduce = program("cone_reduce.frag");
-  gl_.UseProgram(reduce);
-  gl_.Uniform1i(loc(reduce, "u_src"), 5);
-  int sw = w, sh = h;
-  for (int level = 1; level < cone_chain_.levels; ++level) {
-    const int dw = std::max(1, sw / 2), dh = std::max(1, sh / 2);
-    gl_.ActiveTexture(GL_TEXTURE0 + 5);
-    gl_.BindTexture(GL_TEXTURE_2D, chain);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, level - 1);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, level - 1);
-    gl_.Uniform4i(loc(reduce, "u_src_size"), sw, sh, 0, 0);
-    attach_level(chain, level);
-    draw(dw, dh);
-    sw = dw;
-    sh = dh;
-  }
-  gl_.ActiveTexture(GL_TEXTURE0 + 5);
-  gl_.BindTexture(GL_TEXTURE_2D, chain);
-  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
-  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, cone_chain_.levels - 1);
-  gl_.BindTexture(GL_TEXTURE_2D, 0);
+  // Each level from the one below (reduce_levels: no pass samples what it writes).
+  reduce_levels(chain, cone_chain_.levels, program("cone_reduce.frag"), w, h);
   debug_check("cone_blur chain");
 
   const Texture& t_uv = upload(kIn0, uv, "cone_blur", 5);
