@@ -119,6 +119,16 @@ def _new_socket(tree, name: str, socket_type: str, in_out: str):
     return sockets.new(socket_type, name)
 
 
+def _sockets(tree):
+    """([(name, socket type)] of the inputs, of the outputs) of a node group."""
+    if hasattr(tree, "interface"):  # Blender 4.0+
+        items = [i for i in tree.interface.items_tree if i.item_type == "SOCKET"]
+        return ([(i.name, i.socket_type) for i in items if i.in_out == "INPUT"],
+                [(i.name, i.socket_type) for i in items if i.in_out == "OUTPUT"])
+    return ([(i.name, i.bl_socket_idname) for i in tree.inputs],
+            [(o.name, o.bl_socket_idname) for o in tree.outputs])
+
+
 def find_group():
     """Glint's node group, or None: a compositor group carrying ``LAYOUT_KEY`` (every
     group Glint builds does), the one named ``GROUP_NAME`` if there are several.
@@ -139,15 +149,20 @@ def build_group():
     if group is None:
         group = bpy.data.node_groups.new(cg.GROUP_NAME, "CompositorNodeTree")
     group.nodes.clear()
-    if hasattr(group, "interface"):
-        group.interface.clear()
-    else:
-        group.inputs.clear()
-        group.outputs.clear()
-    for name, kind in cg.GROUP_INPUTS:
-        _new_socket(group, name, kind, "INPUT")
-    for name, kind in cg.GROUP_OUTPUTS:
-        _new_socket(group, name, kind, "OUTPUT")
+    # A group saved by an older Glint is rebuilt in place. Its sockets are kept
+    # when they are already the ones wanted: clearing them would cut every link
+    # the scenes' trees make to the group node (the Composite's input with them),
+    # and the upgraded file would render black.
+    if _sockets(group) != (list(cg.GROUP_INPUTS), list(cg.GROUP_OUTPUTS)):
+        if hasattr(group, "interface"):
+            group.interface.clear()
+        else:
+            group.inputs.clear()
+            group.outputs.clear()
+        for name, kind in cg.GROUP_INPUTS:
+            _new_socket(group, name, kind, "INPUT")
+        for name, kind in cg.GROUP_OUTPUTS:
+            _new_socket(group, name, kind, "OUTPUT")
     nodes = {cg.GROUP_IN: group.nodes.new("NodeGroupInput"), cg.GROUP_OUT: group.nodes.new("NodeGroupOutput")}
     nodes[cg.GROUP_IN].location = (-900, 0)
     nodes[cg.GROUP_OUT].location = (1300, 0)
@@ -294,6 +309,12 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     if not any(l.from_node == rl for l in gnode.inputs["Image"].links):
         change("the Glint node is not fed by the Render Layers node")
         tree.links.new(rl.outputs["Image"], gnode.inputs["Image"])
+    # A Composite node that receives nothing writes a black frame: feed it
+    # Glint's image (a group rebuilt by an older Glint could leave it so).
+    for comp in (n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"):
+        if not comp.inputs["Image"].links:
+            change("the Composite node receives nothing")
+            tree.links.new(gnode.outputs["Image"], comp.inputs["Image"])
     _ensure_exr_node(scene, tree, gnode, change)
     if not scene.render.use_compositing:
         # A value, not a structure: set even from the render thread, before the

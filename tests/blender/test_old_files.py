@@ -96,3 +96,23 @@ def test_compositing_switched_off_after_enabling_is_turned_on_at_render_init(sam
     assert "Glint: frame 1: reflections composited" in log
     img = read_exr(os.path.join(out, "frame_0001.exr"))
     assert np.abs(img[..., :3] - reference[..., :3]).mean() < 1e-3
+
+
+def test_a_group_saved_by_an_older_glint_is_rebuilt_and_the_frame_is_not_black(
+        samples, reference, blender, tmp_path):
+    """A file saved by an older Glint carries an older node group: rebuilding it must
+    keep the links the scene's tree makes to it (cutting them left the Composite node
+    with nothing, and the frame black)."""
+    path = str(tmp_path / "older_group.blend")
+    code = ("from glint import compositor\n"
+            "g = compositor.find_group()\n"
+            "g[compositor.LAYOUT_KEY] = 'older'\n"
+            "g.nodes.remove(g.nodes['blur'])\n")
+    log = blender.run([samples["mirror_floor"], "--addons", "glint", "--python-expr",
+                       code + SAVE.format(code="", path=path)])
+    assert "SAVED" in log, log[-2000:]
+    out = str(tmp_path / "out")
+    log = blender.render(path, out, CONFIG)
+    assert "Glint: frame 1: reflections composited" in log, log[-3000:]
+    img = read_exr(os.path.join(out, "frame_0001.exr"))
+    assert np.abs(img[..., :3] - reference[..., :3]).mean() < 1e-3
