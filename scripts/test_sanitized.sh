@@ -22,8 +22,7 @@ command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DGLINT_SANITIZE=address,undefined,float-cast-overflow -DGLINT_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null || exit 1
 targets=()
-# CI: no module or tool to build, but every executable ctest runs: the C++
-# tests and the fuzz harnesses' corpus replays.
+# CI: what ctest runs (the C++ tests and the corpus replays), no module or tool.
 ((cpp_only)) && targets=(--target glint_tests fuzz_replay_exr fuzz_replay_trace fuzz_replay_raster)
 cmake --build "$build" -j2 "${targets[@]}" || exit 1
 
