@@ -153,3 +153,15 @@ def glint():
     import glint_core as g
 
     return g
+
+
+@pytest.fixture(scope="session")
+def gl(glint):
+    """glint_core, after checking that backend="gl" can run here (else skip)."""
+    if not glint.gl_compiled_in():
+        pytest.skip("glint_core was built with GLINT_WITH_GL=OFF")
+    try:
+        glint.backend_name("gl")
+    except glint.BackendUnavailable as exc:
+        pytest.skip(f"no OpenGL context here: {exc}")
+    return glint

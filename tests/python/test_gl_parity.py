@@ -46,18 +46,6 @@ TRACE_SHARE = 0.99
 STAGE_SHARE = 0.999
 
 
-@pytest.fixture(scope="module")
-def gl(glint):
-    """glint_core, after checking that backend="gl" can run here (else skip)."""
-    if not glint.gl_compiled_in():
-        pytest.skip("glint_core was built with GLINT_WITH_GL=OFF")
-    try:
-        glint.backend_name("gl")
-    except glint.BackendUnavailable as exc:
-        pytest.skip(f"no OpenGL context here: {exc}")
-    return glint
-
-
 # --- inputs --------------------------------------------------------------------------
 
 GLOSSY_FLOOR = A.Material(color=(0.35, 0.35, 0.4), specular=(0.9, 0.9, 0.9), alpha=0.7)

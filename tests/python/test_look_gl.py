@@ -14,19 +14,6 @@ pytestmark = pytest.mark.gl
 SHARE = 0.999
 
 
-@pytest.fixture(scope="module")
-def gl():
-    import glint_core as g
-
-    if not g.gl_compiled_in():
-        pytest.skip("glint_core was built with GLINT_WITH_GL=OFF")
-    try:
-        g.backend_name("gl")
-    except g.BackendUnavailable as exc:
-        pytest.skip(f"no OpenGL context here: {exc}")
-    return g
-
-
 def agree(label, cpu, gl_out, tol=1e-4):
     d = np.abs(cpu.astype(np.float64) - gl_out).max(axis=-1)
     share = float((d <= tol).mean())
