@@ -332,6 +332,27 @@ PYBIND11_MODULE(glint_core, m) {
       "pixels * cone tan, read trilinearly from a 2x2 box mip chain.");
 
   m.def(
+      "cone_lod",
+      [](const pyb::handle& uv, const pyb::handle& specular) {
+        const Image u = image_from_array(uv, "uv", 0.0f, 4);
+        const Image s = image_from_array(specular, "specular", 0.0f, 4);
+        Image r;
+        {
+          pyb::gil_scoped_release release;
+          r = cone_lod(u, s);
+        }
+        pyb::array_t<float> out({r.height, r.width});
+        float* o = out.mutable_data();
+        for (int y = 0; y < r.height; ++y)
+          for (int x = 0; x < r.width; ++x) o[static_cast<size_t>(y) * r.width + x] = r.px(x, y)[0];
+        return out;
+      },
+      "uv"_a, "specular"_a,
+      "[H, W] level of detail of the cone blur per pixel: log2(2 * ray length in pixels *\n"
+      "cone tan), 0 where that footprint is within a pixel, no hit was found or the pixel\n"
+      "is a mirror or does not reflect (the rule cone_blur applies).");
+
+  m.def(
       "reflection",
       [](const pyb::handle& color, const pyb::handle& blurred, const pyb::handle& specular,
          const pyb::handle& weight, const std::string& backend) {

@@ -249,6 +249,30 @@ def test_contact_and_smooth_pixels_keep_their_colour():
     assert glint_core.cone_blur(col, uv, spec).tobytes() == col.tobytes()
 
 
+@pytest.mark.parametrize("lod", [0.25, 1.0, 3.5, 6.0])
+def test_cone_lod_is_log2_of_the_footprint(lod):
+    """cone_lod, the map the add-on's compositor blends its blur levels by, is
+    log2(2 L tan) for a ray of L pixels; 0 for a mirror, a miss, a non-reflective
+    pixel, or a footprint within one pixel."""
+    h, w = 20, 30
+    uv, spec = cone_inputs(h, w, footprint_offset(lod, 0.3), 0.3)
+    got = glint_core.cone_lod(uv, spec)
+    assert got.shape == (h, w) and got.dtype == np.float32
+    want = max(lod, 0.0) if 2.0 ** lod > 1.0 else 0.0
+    np.testing.assert_allclose(got, want, atol=1e-4)
+    uv_miss = uv.copy()
+    uv_miss[..., 2] = 0.0
+    assert not glint_core.cone_lod(uv_miss, spec).any()
+    mirror = spec.copy()
+    mirror[..., 3] = 1.0
+    assert not glint_core.cone_lod(uv, mirror).any()
+    dull = spec.copy()
+    dull[..., :3] = 0.0
+    assert not glint_core.cone_lod(uv, dull).any()
+    with pytest.raises(ValueError, match="specular"):
+        glint_core.cone_lod(uv, spec[:, :-1])
+
+
 def test_blur_grows_with_the_ray_length():
     """Far reflections spread: the deviation from the checkerboard mean falls as
     the ray gets longer."""

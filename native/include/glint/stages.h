@@ -58,6 +58,20 @@ inline float cone_tan(float alpha) {
   const float t = 2.0f * alpha;
   return d * kMaxConeTan > t ? t / d : kMaxConeTan;
 }
+// The cone blur's level of detail at pixel (x, y) of a w x h image: log2 of
+// the footprint 2 * |hit uv - pixel centre| (pixels) * cone_tan(alpha), 0
+// where the footprint is within one pixel or the pixel reports no hit (vis
+// uv[2] <= 0) or is a mirror. `uv` and `spec` are that pixel's texels. Both
+// backends' cone blur and the add-on's compositor blur read this one rule.
+inline float cone_lod_at(int x, int y, int w, int h, const float* uv, const float* spec) {
+  if (!(uv[2] > 0.0f) || !(uv[0] - uv[0] == 0.0f) || !(uv[1] - uv[1] == 0.0f)) return 0.0f;
+  const float alpha = ggx_alpha_of(spec);
+  if (!(alpha > 0.0f)) return 0.0f;
+  const float dx = uv[0] * static_cast<float>(w) - (static_cast<float>(x) + 0.5f);
+  const float dy = uv[1] * static_cast<float>(h) - (static_cast<float>(y) + 0.5f);
+  const float footprint = 2.0f * std::sqrt(dx * dx + dy * dy) * cone_tan(alpha);
+  return footprint > 1.0f ? std::log2(footprint) : 0.0f;
+}
 // True when a position texel counts as "seen": w > 0 and every channel finite.
 inline bool texel_seen(const float* p) {
   return p[3] > 0.0f && p[0] - p[0] == 0.0f && p[1] - p[1] == 0.0f && p[2] - p[2] == 0.0f &&
@@ -152,6 +166,11 @@ void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt);
 void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
                                     const Mat4& projection);
 void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular);
+
+// Each pixel's cone_lod_at() as a one-channel image in r (g, b, a zero):
+// what a compositor outside the core needs to blur a reflection it samples
+// itself the way cone_blur would. Checks its inputs as cone_blur does.
+Image cone_lod(const Image& uv, const Image& specular);
 // The checks every backend's reflection / combine make before they run.
 void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,
                                const Image* weight);

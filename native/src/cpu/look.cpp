@@ -109,15 +109,11 @@ Image cone_blur(const Image& color, const Image& uv, const Image& specular, int 
     for (int x = 0; x < out.width; ++x) {
       const float* s = specular.px(x, y);
       const float* t = uv.px(x, y);
-      if (!is_reflective(s) || !(clamp01(t[2]) > 0.0f)) continue;
-      if (!finite_f(t[0]) || !finite_f(t[1])) continue;
-      const float alpha = ggx_alpha_of(s);
-      if (!(alpha > 0.0f)) continue;
+      if (!is_reflective(s)) continue;
+      const float full = cone_lod_at(x, y, out.width, out.height, t, s);
+      if (!(full > 0.0f)) continue;  // within one texel: the colour itself
       const float cx = static_cast<float>(x) + 0.5f, cy = static_cast<float>(y) + 0.5f;
-      const float dx = t[0] * w - cx, dy = t[1] * h - cy;
-      const float footprint = 2.0f * std::sqrt(dx * dx + dy * dy) * cone_tan(alpha);
-      if (!(footprint > 1.0f)) continue;  // within one texel: the colour itself
-      const float lod = std::min(std::log2(footprint), static_cast<float>(last));
+      const float lod = std::min(full, static_cast<float>(last));
       const int k0 = static_cast<int>(lod);
       const int k1 = std::min(k0 + 1, last);
       const float f = lod - static_cast<float>(k0);
