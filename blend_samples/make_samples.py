@@ -235,7 +235,7 @@ def sun(scene, rotation=(math.radians(50), math.radians(10), math.radians(30)), 
 
 
 # The samples' tuned parameters: finer and heavier than the Medium preset.
-TUNED = dict(max_distance=20.0, resolution=1.0, steps=16, thickness=1.0, blur_size=4)
+TUNED = dict(max_distance=20.0, resolution=1.0, steps=16, thickness=1.0)
 
 
 def glint(scene, **params):
@@ -290,7 +290,7 @@ def make_metals(outdir, size):
     plane(scene, "Ground", 8, 8, diffuse("Ground", (0.2, 0.2, 0.2)), location=(0, 0, -0.01))
     camera(scene, (0.0, -6.5, 2.6), (0.0, 0.6, 0.4))
     sun(scene)
-    glint(scene, **dict(TUNED, blur_size=6))
+    glint(scene, **TUNED)
     save(scene, outdir, "metals_roughness")
 
 

@@ -15,6 +15,7 @@ from typing import Dict, Optional
 import bpy
 import numpy as np
 
+from . import gather
 from .logic import compositing as cg
 
 LAYOUT_KEY = "glint_layout"
@@ -77,22 +78,22 @@ def forget_filled() -> None:
     _filled = None
 
 
-def clear_images(only_mask: bool = False) -> None:
-    """Zero the Glint images that hold a frame: with a zero mask the group passes
-    the render through unchanged (out = base * 1 + 0), so a frame Glint cannot
-    handle composites as if Glint were off. Images are not copied for the render
-    (under F12 the node tree is, before ``frame_change_post``: a mute set there
-    is not seen), so what is written here is what the compositor reads.
+def clear_images(only_pass_through: bool = False) -> None:
+    """Zero the Glint images that hold a frame: with a zero UV image (vis 0) the
+    group passes the render through unchanged (D = 0, out = frame + 0), so a
+    frame Glint cannot handle composites as if Glint were off. Images are not
+    copied for the render (under F12 the node tree is, before
+    ``frame_change_post``: a mute set there is not seen), so what is written
+    here is what the compositor reads.
 
-    ``only_mask``: zero the mask alone, which is all the composited frame reads
-    through (every reflection term is multiplied by its amount); the UV and
-    G-buffer images only reach the frame through a debug view or the layers EXR,
-    and stay listed as filled for the next full clear. At 1920x1080 each image is
-    33 MB to write."""
+    ``only_pass_through``: zero the UV image alone, which is all the composited
+    frame reads through; the weight and G-buffer images only reach the frame
+    through it (or a debug view, or the layers EXR), and stay listed as filled
+    for the next full clear. At 1920x1080 each image is 33 MB to write."""
     global _filled
     names = cg.ALL_IMAGES if _filled is None else sorted(_filled)
-    if only_mask:
-        names = [n for n in names if n == cg.IMAGE_MASK]
+    if only_pass_through:
+        names = [n for n in names if n == cg.PASS_THROUGH_IMAGE]
     for name in names:
         img = bpy.data.images.get(name)
         if img is None:
@@ -102,10 +103,10 @@ def clear_images(only_mask: bool = False) -> None:
             continue
         img.pixels.foreach_set(np.zeros(w * h * 4, dtype=np.float32))
         img.update()
-    if not only_mask:
+    if not only_pass_through:
         _filled = set()
     elif _filled is not None:
-        _filled.discard(cg.IMAGE_MASK)
+        _filled.discard(cg.PASS_THROUGH_IMAGE)
 
 
 # ----------------------------------------------------------------------------
@@ -160,7 +161,9 @@ def build_group():
             group.inputs.clear()
             group.outputs.clear()
         for name, kind in cg.GROUP_INPUTS:
-            _new_socket(group, name, kind, "INPUT")
+            sock = _new_socket(group, name, kind, "INPUT")
+            if name != "Image":  # an engine without the pass adds nothing to replace
+                sock.default_value = (0.0, 0.0, 0.0, 1.0)
         for name, kind in cg.GROUP_OUTPUTS:
             _new_socket(group, name, kind, "OUTPUT")
     nodes = {cg.GROUP_IN: group.nodes.new("NodeGroupInput"), cg.GROUP_OUT: group.nodes.new("NodeGroupOutput")}
@@ -183,18 +186,34 @@ def build_group():
     return group
 
 
-def update_group(glint) -> None:
-    """Push the settings the group reads (blur size, debug switches)."""
+def update_group(glint, rough: bool = True) -> None:
+    """Push the values the group reads: the debug switches, and whether the
+    blur levels run (``rough``: some reflective material of the scene is rough)."""
     group = find_group()
     if group is None:
         return
-    blur = group.nodes.get("blur")
-    if blur is not None and (blur.size_x != glint.blur_size or blur.size_y != glint.blur_size):
-        blur.size_x = blur.size_y = glint.blur_size
-    for name, check in cg.switch_states(glint.debug_view).items():
+    for name, check in cg.switch_states(glint.debug_view, rough).items():
         node = group.nodes.get(name)
         if node is not None and node.check != check:
             node.check = check
+
+
+def scene_has_rough_reflector(scene) -> bool:
+    """Whether a material of the scene's objects reflects and is rough enough for
+    the blur (its shininess below a mirror's): the blur levels run only then.
+    Read from the materials, not the frame, because the render takes the node
+    tree's values before the frame is exported (module docstring of handlers)."""
+    seen = set()
+    for ob in scene.objects:
+        for slot in getattr(ob, "material_slots", ()):
+            mat = slot.material
+            if mat is None or mat.name in seen:
+                continue
+            seen.add(mat.name)
+            spec, _ = gather.material_info(mat)
+            if spec.amount > 0 and spec.alpha < 1.0:
+                return True
+    return False
 
 
 # ----------------------------------------------------------------------------
@@ -269,7 +288,7 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     if not _group_is_current(group):
         change("Glint's node group is missing or out of date")
         group = build_group()
-    update_group(glint)  # values only, written when they differ
+    update_group(glint, scene_has_rough_reflector(scene))  # values only, written when they differ
     view_layer = target_view_layer(scene)
     rl = _render_layers_node(tree, scene, view_layer)
     if rl is None:
@@ -309,6 +328,7 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     if not any(l.from_node == rl for l in gnode.inputs["Image"].links):
         change("the Glint node is not fed by the Render Layers node")
         tree.links.new(rl.outputs["Image"], gnode.inputs["Image"])
+    _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
     # A Composite node that receives nothing writes a black frame: feed it
     # Glint's image (a group rebuilt by an older Glint could leave it so).
     for comp in (n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"):
@@ -327,11 +347,34 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     return f"turned on {' and '.join(turned_on)} so that its reflections reach the frame"
 
 
+def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on) -> None:
+    """Feed the group the engine's own specular (what a found reflection
+    replaces): Eevee's Specular Light and Specular Color. The links are made for
+    every engine; an engine that does not write the passes leaves the sockets
+    unavailable and the group's inputs at black (nothing replaced)."""
+    for output, group_input, _ in cg.ENGINE_PASSES:
+        if output not in rl.outputs:
+            continue
+        if not any(l.from_node == rl and l.from_socket.name == output for l in gnode.inputs[group_input].links):
+            change(f"the engine's {group_input} pass is not linked to the Glint node")
+            tree.links.new(rl.outputs[output], gnode.inputs[group_input])
+    if scene.render.engine == "BLENDER_EEVEE":
+        off = [flag for _, _, flag in cg.ENGINE_PASSES if not getattr(view_layer, flag)]
+        if off:
+            # Values, not structure: written even from the render thread, which
+            # copies the view layers after render_init.
+            for flag in off:
+                setattr(view_layer, flag, True)
+            scene.glint.owns_specular_passes = True
+            turned_on.append("Eevee's Specular Light and Specular Color passes (what a reflection replaces)")
+
+
 def turned_on_notice(scene) -> Optional[str]:
     """The panel's note of what Glint switched on in this scene, or None."""
     glint = scene.glint
     what = [label for flag, label in ((glint.owns_use_nodes, "the compositor's nodes"),
-                                      (glint.owns_use_compositing, "Post Processing > Compositing"))
+                                      (glint.owns_use_compositing, "Post Processing > Compositing"),
+                                      (glint.owns_specular_passes, "Eevee's Specular Light and Color passes"))
             if flag]
     return f"Glint turned on {' and '.join(what)}" if what else None
 
@@ -387,13 +430,17 @@ def remove(scene) -> None:
             scene.use_nodes = False
     if glint.owns_use_compositing:
         scene.render.use_compositing = False
-    glint.owns_use_nodes = glint.owns_use_compositing = False
+    if glint.owns_specular_passes:
+        view_layer = target_view_layer(scene)
+        for _, _, flag in cg.ENGINE_PASSES:
+            setattr(view_layer, flag, False)
+    glint.owns_use_nodes = glint.owns_use_compositing = glint.owns_specular_passes = False
     still_used = any(s.glint.enabled and s != scene for s in bpy.data.scenes)
     if not still_used:
         group = find_group()
         if group is not None and group.users == 0:
             bpy.data.node_groups.remove(group)
-        for name in cg.ALL_IMAGES:
+        for name in cg.ALL_IMAGES + cg.LEGACY_IMAGES:
             img = bpy.data.images.get(name)
             if img is not None and img.users == 0:
                 bpy.data.images.remove(img)

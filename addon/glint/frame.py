@@ -20,7 +20,6 @@ def settings_dict(glint) -> dict:
     return {
         "max_distance": glint.max_distance, "resolution": glint.resolution, "steps": glint.steps,
         "thickness": glint.thickness, "march": glint.march_name, "preset": glint.preset_name,
-        "blur_size": glint.blur_size,
         "backend": glint.backend, "debug_view": glint.debug_view, "write_layers_exr": glint.write_layers_exr,
     }
 
@@ -79,6 +78,9 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
     if core is None:
         report.status, report.message = "error", native.error()
         return report
+    if scene.render.engine in compositing.TRUE_REFLECTION_ENGINES:
+        report.status, report.message = "skipped", compositing.TRUE_REFLECTION_NOTE
+        return report
     progress = Progress(0, report=progress_report, should_stop=should_stop, label="Glint export")
     try:
         with timings.measure("export"):
@@ -126,9 +128,14 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.backend = used
         progress.check()
         with timings.measure("images"):
-            # The specular buffer is the mask as it is: the group's nodes take the
-            # amount and roughness from it (no per-pixel work here).
-            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_MASK: specular}
+            # Everything the composite needs that does not depend on the frame's
+            # colour, from the core: each pixel's weight and blur level.
+            lod = core.cone_lod(uv, specular)
+            weight = core.specular_weight(position, normal, specular, proj32)
+            images = {compositing.IMAGE_UV: compositing.uv_image(uv),
+                      compositing.IMAGE_WEIGHT: compositing.weight_image(weight, lod)}
+            if not compositing.any_rough(specular, uv, lod):
+                report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
             view = values["debug_view"]
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)

@@ -109,9 +109,9 @@ def on_render_pre(scene, *args):
     _job["done"] = False
     try:
         # A frame Glint does not handle passes through. Only debug views and the
-        # layers EXR show more than the mask: then every image is zeroed.
+        # layers EXR show more than the UV image lets through: then every image is zeroed.
         g = scene.glint
-        compositor.clear_images(only_mask=g.debug_view == "NONE" and not g.write_layers_exr)
+        compositor.clear_images(only_pass_through=g.debug_view == "NONE" and not g.write_layers_exr)
     except Exception as exc:
         traceback.print_exc()
         log(f"could not clear Glint's images ({type(exc).__name__}: {exc})")

@@ -134,7 +134,6 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
     resolution: _param("resolution", float)
     steps: _param("steps", int)
     thickness: _param("thickness", float, update=_on_compositor_setting)
-    blur_size: _param("blur_size", int)
     march: EnumProperty(name="March", items=_march_items, get=_get_march, set=_set_march,
                         update=_on_raw, description="How rays are marched in screen space")
     backend: EnumProperty(name="Backend", items=sl.BACKENDS, default="AUTO",
@@ -150,6 +149,9 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
                                description="View layer to reflect (empty: the first one rendered)")
     owns_use_nodes: BoolProperty(default=False, options={"HIDDEN"},
                                  description="Glint switched the compositor on and will switch it off")
+    owns_specular_passes: BoolProperty(default=False, options={"HIDDEN"},
+                                       description="Glint switched Eevee's Specular Light and Color "
+                                                   "passes on and will switch them off")
     owns_use_compositing: BoolProperty(default=False, options={"HIDDEN"},
                                        description="Glint switched Post Processing > Compositing on "
                                                    "and will switch it off")

@@ -83,7 +83,6 @@ class GLINT_PT_parameters(_GlintSubPanel, bpy.types.Panel):
         col.prop(glint, "resolution")
         col.prop(glint, "steps")
         layout.prop(glint, "march")
-        layout.prop(glint, "blur_size")
 
 
 class GLINT_PT_backend(_GlintSubPanel, bpy.types.Panel):

@@ -1,5 +1,8 @@
-"""The compositor group, run on numpy arrays, against the core's combine formula
-written out here, and (when the build is there) against glint_core's own stages."""
+"""The compositor group, run on numpy arrays, against the composite's formula
+written out here (docs/addon.md), and (when the build is there) against
+glint_core's own stages."""
+import math
+
 import numpy as np
 import pytest
 
@@ -30,7 +33,18 @@ def test_links_name_real_nodes_and_sockets():
     assert {(cg.GROUP_OUT, i) for i in range(len(cg.GROUP_OUTPUTS))} <= targets
 
 
-# -- an independent reference of the core's combine ---------------------------
+def test_blur_levels_hold_half_their_energy_in_the_cone_footprint():
+    """A 2D Gaussian holds half its energy within r = sigma sqrt(2 ln 2): each
+    level's sigma puts that r at half its lod's footprint 2^lod."""
+    for lod, sigma in cg.BLUR_LEVELS:
+        r = 2.0 ** lod / 2
+        assert 1 - math.exp(-r * r / (2 * sigma * sigma)) == pytest.approx(0.5, abs=1e-9)
+        kind, props, defaults = cg.GROUP_NODES[f"blur_{cg.BLUR_LEVELS.index((lod, sigma)) + 1}"]
+        assert props["filter_type"] == "FAST_GAUSS"
+        assert props["size_x"] * defaults[1] == pytest.approx(sigma)
+
+
+# -- an independent reference of the composite ---------------------------------
 
 def bilinear_clamp(img, u, v):
     h, w = img.shape[:2]
@@ -49,33 +63,33 @@ def bilinear_clamp(img, u, v):
     return bottom * (1 - ay) + top * ay
 
 
-def box_clamp(img, size):
-    if size == 0:
-        return img.copy()
+def gauss_clamp(img, sigma):
+    """A separable Gaussian, clamp to edge, cut at 4 sigma (float64)."""
+    r = max(1, int(math.ceil(4 * sigma)))
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+    k /= k.sum()
     h, w = img.shape[:2]
-    out = np.zeros_like(img, dtype=np.float64)
-    for dy in range(-size, size + 1):
-        for dx in range(-size, size + 1):
-            ys = np.clip(np.arange(h) + dy, 0, h - 1)
-            xs = np.clip(np.arange(w) + dx, 0, w - 1)
-            out += img[ys][:, xs]
-    return (out / (2 * size + 1) ** 2).astype(np.float32)
+    tmp = sum(k[i] * img[np.clip(np.arange(h) + i - r, 0, h - 1)] for i in range(2 * r + 1))
+    out = sum(k[i] * tmp[:, np.clip(np.arange(w) + i - r, 0, w - 1)] for i in range(2 * r + 1))
+    return out.astype(np.float32)
 
 
-def reference_combine(base, uv, spec, seen, size):
-    vis = np.where(seen, uv[..., 2], 0.0)
-    c = bilinear_clamp(base, uv[..., 0], uv[..., 1])
-    C = np.concatenate([c[..., :3] * vis[..., None], vis[..., None]], axis=-1)
-    C[vis <= 0] = 0
-    B = box_clamp(C.astype(np.float32), size)
-    amount = spec[..., :3].mean(-1)
-    amount = np.where(seen & (amount > 0), amount, 0.0)
-    r = 1 - np.clip(spec[..., 3], 0, 1)
-    refl = (C * (1 - r[..., None]) + B * r[..., None]) * amount[..., None]
-    a = np.clip(refl[..., 3], 0, 1)
+def reference_composite(base, uv, weight, lod, light, colour):
+    """out = base + R, R = D at the pixel's lod between Gaussian levels of D,
+    D = C W - vis S: written from the formula, not from the node list."""
+    vis = uv[..., 2:3]
+    C = np.where(vis > 0, bilinear_clamp(base, uv[..., 0], uv[..., 1]) * vis, 0.0)
+    D = C[..., :3] * weight[..., :3] - vis * (light[..., :3] * colour[..., :3])
+    levels = [(0.0, D)] + [(lod_j, gauss_clamp(D, sigma)) for lod_j, sigma in cg.BLUR_LEVELS]
+    R = np.array(D)
+    for (l0, b0), (l1, b1) in zip(levels, levels[1:]):
+        inside = (lod > l0) & (lod <= l1)
+        f = ((lod - l0) / (l1 - l0))[..., None]
+        R = np.where(inside[..., None], (1 - f) * b0 + f * b1, R)
+    R = np.where((lod > levels[-1][0])[..., None], levels[-1][1], R)
     out = base.copy()
-    out[..., :3] = base[..., :3] * (1 - a[..., None]) + refl[..., :3]
-    return out, refl
+    out[..., :3] += R
+    return out, R
 
 
 def scene(h=12, w=16, seed=3):
@@ -94,7 +108,12 @@ def scene(h=12, w=16, seed=3):
     spec[~seen] = 0  # as the rasterizer leaves pixels no triangle covers
     mask = cg.reflective_mask(position, spec)
     uv[~mask] = 0  # the trace reports nothing where it does not march
-    return base, position, spec, uv, seen
+    weight = np.zeros((h, w, 4), np.float32)
+    weight[mask, :3] = rng.uniform(0.02, 0.9, (int(mask.sum()), 3))
+    lod = np.where(mask, rng.uniform(0, 9.5, (h, w)), 0).astype(np.float32)
+    light = rng.uniform(0, 2, (h, w, 4)).astype(np.float32)
+    colour = rng.uniform(0, 1, (h, w, 4)).astype(np.float32)
+    return base, position, spec, uv, seen, weight, lod, light, colour
 
 
 def np_map_uv(image, uv_rgba):
@@ -104,56 +123,112 @@ def np_map_uv(image, uv_rgba):
     return np.where(vis > 0, c, 0).astype(np.float32)
 
 
-@pytest.mark.parametrize("size", [0, 1, 3])
-def test_group_computes_the_core_combine(size):
-    base, position, spec, uv, seen = scene()
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec,
-              cg.IMAGE_DEBUG: np.zeros_like(base), cg.IMAGE_POSITION: position,
-              cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec}
-    out = cg.evaluate_group(base, images, np_map_uv, box_clamp, size)
-    want, refl = reference_combine(base, uv, spec, seen, size)
-    assert np.allclose(out["Image"], want, atol=1e-5)
-    assert np.allclose(out["Reflection"][..., :3], refl[..., :3], atol=1e-5)
-    assert np.allclose(out["Reflection"][..., 3], np.clip(refl[..., 3], 0, 1), atol=1e-5)
+def images_of(base, position, spec, uv, weight, lod, debug=None):
+    return {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_WEIGHT: cg.weight_image(weight.copy(), lod),
+            cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
+            cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec}
+
+
+@pytest.mark.parametrize("engine_passes", [True, False])
+def test_group_computes_the_composite(engine_passes):
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    kw = dict(specular_light=light, specular_color=colour) if engine_passes else {}
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
+    if not engine_passes:  # an unlinked input is black: nothing replaced, the reflection added
+        light = colour = np.zeros_like(base)
+    want, R = reference_composite(base, uv, weight, lod, light, colour)
+    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.array_equal(out["Image"][..., 3], base[..., 3])
+    assert np.allclose(out["Reflection"][..., :3], R, atol=1e-5)
     assert np.array_equal(out["Base"], base)
     assert np.array_equal(out["Visibility"], uv[..., 2])
+    assert np.allclose(out["Engine Specular"][..., :3], light[..., :3] * colour[..., :3], atol=1e-6)
+
+
+def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
+    """vis 1, lod 0: the pixel's engine specular S leaves, the reflection C W comes in."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    lod[:] = 0
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+                            specular_light=light, specular_color=colour)["Image"]
+    hit = uv[..., 2] > 0
+    C = np_map_uv(base, cg.uv_image(uv))
+    want = base[..., :3] + C[..., :3] * weight[..., :3] - uv[..., 2:3] * light[..., :3] * colour[..., :3]
+    assert np.allclose(out[hit, :3], want[hit], atol=1e-5)
+    assert np.array_equal(out[~hit], base[~hit])
+
+
+def test_without_rough_surfaces_the_levels_are_switched_off():
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    lod[:] = 0  # every pixel sharp: the levels would pick D anyway
+    calls = []
+    images = images_of(base, position, spec, uv, weight, lod)
+    on = cg.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s))
+    off = cg.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s),
+                            use_blur=False)
+    assert len(calls) == len(cg.BLUR_LEVELS)  # only the first evaluation blurred
+    assert np.allclose(on["Image"], off["Image"], atol=1e-6)
+    assert not cg.any_rough(spec, uv, lod) and cg.any_rough(spec, uv, lod + 0.5)
+
+
+def test_nan_engine_specular_where_nothing_reflects_stays_out_of_the_frame():
+    """Eevee divides its light passes by their colour: 0 / 0 where a pixel has no
+    specular colour. Those pixels have no hit (vis 0) and must stay the engine's."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    lod[:] = 0
+    miss = uv[..., 2] == 0
+    light[miss] = np.nan
+    colour[miss] = 0
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+                            specular_light=light, specular_color=colour)
+    assert np.isfinite(out["Image"]).all()
+    assert np.array_equal(out["Image"][miss], base[miss])
 
 
 def test_nothing_reflective_leaves_the_base_bit_exact():
-    base, position, spec, uv, seen = scene()
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
     spec[..., :3] = 0
     uv[:] = 0
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec,
-              cg.IMAGE_DEBUG: base, cg.IMAGE_POSITION: position, cg.IMAGE_NORMAL: base, cg.IMAGE_SPECULAR: spec}
-    out = cg.evaluate_group(base, images, np_map_uv, box_clamp, 2)
+    weight[:] = 0
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod * 0), np_map_uv, gauss_clamp,
+                            specular_light=light, specular_color=colour)
     assert np.array_equal(out["Image"], base)
 
 
 def test_debug_switches():
-    base, position, spec, uv, seen = scene()
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
     dbg = np.full_like(base, 0.25)
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec, cg.IMAGE_DEBUG: dbg,
-              cg.IMAGE_POSITION: position, cg.IMAGE_NORMAL: base, cg.IMAGE_SPECULAR: spec}
-    refl = cg.evaluate_group(base, images, np_map_uv, box_clamp, 1, debug_view="REFLECTION")
+    images = images_of(base, position, spec, uv, weight, lod, debug=dbg)
+    refl = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, debug_view="REFLECTION")
     assert np.array_equal(refl["Image"], refl["Reflection"])
     for view in cg.GBUFFER_DEBUG_VIEWS:
-        assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, box_clamp, 1, view)["Image"], dbg)
-    assert cg.switch_states("NONE") == {"show_reflection": False, "show_debug": False}
+        assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, gauss_clamp,
+                                                debug_view=view)["Image"], dbg)
+    assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False}
 
 
-def test_group_matches_glint_core_stages(core):
-    base, position, spec, uv, seen = scene(20, 24, seed=7)
-    size = 2
+def test_group_matches_glint_core_for_a_mirror(core):
+    """Where nothing is rough the group and glint_core's stages compute the same
+    thing: the core's reflection colour x its weight, replacing S by visibility."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(20, 24, seed=7)
+    lod[:] = 0
+    S = light * colour
     color = core.reflection_color(uv, base)
-    blurred = core.box_blur(color, size=size)
-    masked_spec = np.where(cg.reflective_mask(position, spec)[..., None], spec, 0).astype(np.float32)
-    refl = core.reflection(color, blurred, masked_spec)
-    want = core.combine(base, refl)
-    images = {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_MASK: spec,
-              cg.IMAGE_DEBUG: base, cg.IMAGE_POSITION: position, cg.IMAGE_NORMAL: base, cg.IMAGE_SPECULAR: spec}
-    out = cg.evaluate_group(base, images, lambda img, uvi: core.reflection_color(np.ascontiguousarray(uvi), img),
-                            lambda img, s: core.box_blur(np.ascontiguousarray(img), size=s), size)
-    assert np.allclose(out["Image"], want, atol=1e-6)
+    refl = core.reflection(color, None, spec, weight=weight)
+    want = core.combine(base, refl, specular_base=S, coverage=color)
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod),
+                            lambda img, uvi: core.reflection_color(np.ascontiguousarray(uvi), img), gauss_clamp,
+                            specular_light=light, specular_color=colour, use_blur=False)
+    # the core clamps base - S coverage at 0; the random S here often exceeds the base
+    ok = (base[..., :3] - S[..., :3] * color[..., 3:4] >= 0).all(axis=-1)
+    assert ok.sum() > 50
+    assert np.allclose(out["Image"][ok, :3], want[ok, :3], atol=1e-5)
+
+
+def test_weight_image_carries_the_lod():
+    w = np.full((2, 3, 4), 0.5, np.float32)
+    out = cg.weight_image(w, np.arange(6, dtype=np.float32).reshape(2, 3))
+    assert np.array_equal(out[..., :3], np.full((2, 3, 3), 0.5)) and np.array_equal(out[..., 3].ravel(), range(6))
 
 
 def test_mask_and_uv_images():

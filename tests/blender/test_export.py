@@ -111,14 +111,18 @@ s.view_layers[0].use_pass_z = True
 s.cycles.filter_width = 0.01
 s.cycles.pixel_filter_type = 'BOX'
 """
-    blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1, "dump": True,
+    # Glint leaves Cycles frames alone (it has true reflections), so its G-buffer
+    # comes from a Workbench render of the same frame, camera and objects.
+    blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
                                                   "exr": "OPEN_EXR_MULTILAYER", "python": code,
-                                                  "glint": {"backend": "CPU"}})
+                                                  "glint": {"enabled": False}})
+    blender.render(samples["mirror_floor"], out + "_gbuffer", {"engine": "BLENDER_WORKBENCH", "dump": True,
+                                                               "glint": {"backend": "CPU"}})
     layers = read_exr(os.path.join(out, "frame_0001.exr"), layer=None)
     depth_layer = next(k for k in layers if k.endswith("Depth"))
     z = layers[depth_layer]
     depth = z[..., 0] if np.any(z[..., 0] != 0) else z[..., 3]
-    dump = load_dump(out)
+    dump = load_dump(out + "_gbuffer")
     pos = dump["position"]
     seen = pos[..., 3] > 0.5
     sky = depth > 1e5

@@ -14,7 +14,7 @@ pytestmark = pytest.mark.blender
 def test_panoramic_camera_is_reported_and_skipped(blender, samples, tmp_path):
     out = str(tmp_path / "pano")
     code = "import bpy; c = bpy.context.scene.camera.data; c.type = 'PANO'; c.cycles.panorama_type = 'EQUIRECTANGULAR'"
-    log = blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1, "python": code})
+    log = blender.render(samples["mirror_floor"], out, {"engine": "BLENDER_WORKBENCH", "python": code})
     assert "is panoramic" in log and "Glint: frame 1: nothing to reflect" in log
     assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
 
@@ -22,7 +22,7 @@ def test_panoramic_camera_is_reported_and_skipped(blender, samples, tmp_path):
 def test_core_error_is_reported_and_the_frame_still_renders(blender, samples, tmp_path):
     out = str(tmp_path / "huge")
     # Wider than the core accepts (32768 pixels a side): rasterize raises ValueError.
-    log = blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
+    log = blender.render(samples["mirror_floor"], out, {"engine": "BLENDER_WORKBENCH",
                                                         "size": [33000, 2], "glint": {"backend": "CPU"}})
     assert "Glint: frame 1: rendered WITHOUT reflections: ValueError" in log
     assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
@@ -34,7 +34,7 @@ def test_a_frame_over_the_memory_limit_renders_without_reflections(blender, samp
     # 1 MiB: the sample's G-buffer alone is more, so the core refuses before allocating.
     blender.env = {**saved, "GLINT_MEMORY_LIMIT_MB": "1"}
     try:
-        log = blender.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
+        log = blender.render(samples["mirror_floor"], out, {"engine": "BLENDER_WORKBENCH",
                                                             "glint": {"backend": "CPU"}})
     finally:
         blender.env = saved
@@ -57,7 +57,7 @@ def no_egl(blender):
 
 def test_gl_that_cannot_run_is_reported(no_egl, samples, tmp_path):
     out = str(tmp_path / "gl")
-    log = no_egl.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1,
+    log = no_egl.render(samples["mirror_floor"], out, {"engine": "BLENDER_WORKBENCH",
                                                        "glint": {"backend": "GL"}})
     assert "Glint: frame 1: rendered WITHOUT reflections: backend unavailable" in log, log[-2000:]
     assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
@@ -65,7 +65,7 @@ def test_gl_that_cannot_run_is_reported(no_egl, samples, tmp_path):
 
 def test_auto_falls_back_to_the_cpu(no_egl, samples, tmp_path):
     out = str(tmp_path / "auto")
-    log = no_egl.render(samples["mirror_floor"], out, {"engine": "CYCLES", "cycles_samples": 1, "dump": True,
+    log = no_egl.render(samples["mirror_floor"], out, {"engine": "BLENDER_WORKBENCH", "dump": True,
                                                        "glint": {"backend": "AUTO"}})
     assert "Glint: frame 1: reflections composited" in log and "backend cpu" in log, log[-2000:]
     assert str(load_dump(out)["backend"]) == "cpu"
@@ -100,13 +100,12 @@ s.glint.enabled = True
 s.glint.write_layers_exr = True
 res['user_on'] = links(t)
 res['exr_node'] = cg.EXR_NODE_NAME in t.nodes
-s.glint.blur_size = 5
 s.glint.debug_view = 'REFLECTION'
 g = bpy.data.node_groups[cg.GROUP_NAME]
-res['blur'] = [g.nodes['blur'].size_x, g.nodes['blur'].size_y]
+res['passes'] = [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]
 res['switch'] = [g.nodes['show_reflection'].check, g.nodes['show_debug'].check]
 s.glint.preset = 'HIGH'
-res['preset'] = [s.glint.march, s.glint.resolution, s.glint.steps, s.glint.blur_size]
+res['preset'] = [s.glint.march, s.glint.resolution, s.glint.steps]
 from glint import native as glint_native
 res['core_high'] = glint_native.load().presets()['high']
 s.glint.steps = 7
@@ -118,6 +117,7 @@ res['user_off'] = links(t)
 res['nodes_off'] = sorted(n.name for n in t.nodes)
 res['use_nodes_off'] = s.use_nodes
 res['group_off'] = cg.GROUP_NAME in bpy.data.node_groups
+res['passes_off'] = [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]
 print('SETUP' + json.dumps(res))
 """
 
@@ -126,17 +126,22 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     log = blender.run(["--addons", "glint", "--python-expr", SETUP_CHECK])
     res = json.loads(next(line[5:] for line in log.splitlines() if line.startswith("SETUP")))
     assert res["plain_on"]["use_nodes"] is True
-    assert res["plain_on"]["links"] == ["Glint:Image->Composite:Image", "Render Layers:Image->Glint:Image"]
+    passes = ["Render Layers:GlossCol->Glint:Specular Color", "Render Layers:GlossDir->Glint:Specular Light"]
+    assert res["plain_on"]["links"] == sorted(["Glint:Image->Composite:Image", "Render Layers:Image->Glint:Image"]
+                                              + passes)
     assert res["plain_off"] == {"use_nodes": False, "group": False, "images": []}
     assert res["user_on"] == sorted(["Render Layers:Image->Glint:Image", "Glint:Image->User Glare:Image",
                                      "User Glare:Image->Composite:Image", "Glint:Image->User Viewer:Image"] +
+                                    passes + ["Glint:Engine Specular->Glint EXR:EngineSpecular"] +
                                     [f"Glint:{name}->Glint EXR:{name}" for name in
                                      ("Image", "Base", "Reflection", "Position", "Normal", "Specular", "UV",
                                       "Visibility")])
     assert res["exr_node"] is True
-    assert res["blur"] == [5, 5] and res["switch"] == [True, False]
+    # Eevee's Specular Light and Color passes: on while Glint is, off again after
+    assert res["passes"] == [True, True] and res["passes_off"] == [False, False]
+    assert res["switch"] == [True, False]
     high = res["core_high"]  # the add-on's presets are the core's
-    assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"], 5]
+    assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"]]
     assert res["preset_after_edit"] == "CUSTOM"
     assert res["nodes_on"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer", "Glint",
                                       "Glint EXR"])
@@ -236,6 +241,6 @@ print('CYCLE OK')
 def test_panels_draw_every_setting(blender):
     log = blender.run(["--addons", "glint", "--python-expr", PANELS])
     line = next(l for l in log.splitlines() if l.startswith("PANELS"))
-    for name in ("enabled", "preset", "max_distance", "resolution", "steps", "thickness", "march", "blur_size",
+    for name in ("enabled", "preset", "max_distance", "resolution", "steps", "thickness", "march",
                  "backend", "view_layer", "debug_view", "write_layers_exr", "glint.compute_layers"):
         assert f"'{name}'" in line, (name, line)

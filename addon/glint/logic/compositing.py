@@ -1,56 +1,101 @@
 """The compositing maths: the images Glint hands the compositor, and the node
-group that turns them into the core's combine, described as data.
+group that turns them into the frame with reflections, described as data.
 
-The core's combine (``native/src/cpu/cpu_backend.cpp``) is premultiplied "over":
+Before the render Glint knows the G-buffer and where each pixel's reflection
+comes from, not its colour; the compositor, after the render, has the colour.
+So the core computes everything that does not depend on colour and hands the
+compositor two images:
 
-    C    = (colour at uv * vis, vis)                    reflection colour
-    B    = box_blur(C)                                  (2 size + 1)^2, all 4 channels
-    refl = (C * (1 - r) + B * r) * amount               r = 1 - clamp(spec.a, 0, 1)
-    out  = base.rgb * (1 - clamp(refl.a, 0, 1)) + refl.rgb,  alpha = base alpha
+    UV image     = (u, v, vis, 1)      Map UV samples the frame at (u, v) and
+                                       premultiplies by vis (the trace's hit
+                                       confidence x the screen-edge fade)
+    weight image = (W.r, W.g, W.b, lod)
+                   W = F0 * A + B, the split-sum weight of the pixel's specular
+                   lobe (glint_core.specular_weight: Fresnel and roughness at
+                   the real view angle); lod = glint_core.cone_lod, the
+                   footprint of the reflection cone as log2 of pixels
 
-where amount = mean(spec.rgb). Before the render Glint knows the G-buffer and
-the reflected uv, not the colour: it hands the compositor two images
+and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
 
-    UV image   = (u, v, vis, 1)        Map UV's UV input: it samples at (u, v)
-                                       and premultiplies by the third channel
-    mask image = the specular buffer   (r, g, b, shininess / 127.75) as the
-                                       rasterizer made it (zero where nothing is
-                                       seen); the nodes take amount and r from it
+    C   = frame(u, v) * vis                             the reflected colour
+    S   = Specular Light * Specular Color               the engine's own specular
+    D   = C * W - vis * S                               what changes: the engine's
+                                                        specular out where a hit
+                                                        replaces it, the reflection in
+    R   = D blurred at the pixel's lod                  (rough surfaces only)
+    out = frame + R
 
-and :data:`GROUP_NODES` / :data:`GROUP_LINKS` compute ``out`` with Blender's
-own nodes (Map UV, a Flat blur, Mix and Math), in the core's order of
-operations. :func:`evaluate_group` runs the same description on numpy arrays,
-so tests can check the wiring against the formula without Blender.
+Replace, not add: where the trace found the reflection (vis 1) the engine's
+specular of the world is taken out and the reflection put in; where it found
+nothing (vis 0), D = 0 and the pixel is exactly the engine's. Engines without
+those passes (Workbench) leave S unlinked, 0: the reflection is added, which
+is what there is to replace there (docs/addon.md, per engine).
+
+The blur: :data:`BLUR_LEVELS` Gaussian levels of D (Blender's Fast Gaussian,
+whose cost does not grow with its size), blended by lod the way the core's
+cone blur blends its mip levels: a pixel at lod l takes
+mix(..., mix(mix(D, B1, s1), B2, s2) ...), s_j = clamp((l - lod_{j-1}) /
+(lod_j - lod_{j-1}), 0, 1). A level j Gaussian has the sigma of a disc of
+diameter 2^lod_j holding half its energy (the cone's definition, see
+``cone_tan``): sigma = 2^lod / (2 sqrt(2 ln 2)). Blurring D rather than C
+weights each neighbour by its own W and S, which vary slowly over a rough
+surface. A frame with no rough reflective surface switches the levels off
+(``use_blur``): the compositor then does not run them at all.
+
+:func:`evaluate_group` runs the same description on numpy arrays, so tests
+check the wiring against the formula without Blender.
 """
 from __future__ import annotations
 
-from typing import Callable, Dict, List, Tuple
+import math
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
 # Image data-blocks the group reads (filled by the add-on before compositing).
 IMAGE_UV = "Glint UV"
-IMAGE_MASK = "Glint Mask"
+IMAGE_WEIGHT = "Glint Weight"
 IMAGE_DEBUG = "Glint Debug"
 IMAGE_POSITION = "Glint Position"
 IMAGE_NORMAL = "Glint Normal"
 IMAGE_SPECULAR = "Glint Specular"
-ALL_IMAGES = (IMAGE_UV, IMAGE_MASK, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR)
+ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR)
+# The one image whose zeros make the group pass the frame through (vis = 0:
+# C = 0 and D = 0): what a frame Glint does not handle clears.
+PASS_THROUGH_IMAGE = IMAGE_UV
+# Images earlier versions of the group read; removed with Glint's own.
+LEGACY_IMAGES = ("Glint Mask",)
+
+# Engines that trace reflections themselves: Glint leaves their frame as it is
+# (a screen-space guess can only be worse than a path-traced reflection).
+TRUE_REFLECTION_ENGINES = ("CYCLES",)
+TRUE_REFLECTION_NOTE = ("Cycles traces true reflections: the frame is left as Cycles rendered it "
+                        "(Glint replaces the specular of rasterizing engines: Eevee, Workbench)")
 
 GROUP_NAME = "Glint"
 GROUP_NODE_NAME = "Glint"  # the group node in the scene's compositor tree
 EXR_NODE_NAME = "Glint EXR"
 
-GROUP_INPUTS = (("Image", "NodeSocketColor"),)
+GROUP_INPUTS = (
+    ("Image", "NodeSocketColor"),
+    ("Specular Light", "NodeSocketColor"),  # the engine's specular radiance (Eevee: Specular Light)
+    ("Specular Color", "NodeSocketColor"),  # its weight (Eevee: Specular Color)
+)
+# Render Layers outputs that feed GROUP_INPUTS[1:], and the view layer flags
+# that make the engine write them. Eevee's Specular Light / Color passes are
+# its glossy ones in the API.
+ENGINE_PASSES = (("GlossDir", "Specular Light", "use_pass_glossy_direct"),
+                 ("GlossCol", "Specular Color", "use_pass_glossy_color"))
 GROUP_OUTPUTS = (
     ("Image", "NodeSocketColor"),  # composited (or the debug view)
-    ("Reflection", "NodeSocketColor"),  # premultiplied reflection
+    ("Reflection", "NodeSocketColor"),  # R: what Glint changes (rgb may be negative), alpha = vis
     ("Base", "NodeSocketColor"),
     ("UV", "NodeSocketColor"),
     ("Visibility", "NodeSocketFloat"),
     ("Position", "NodeSocketColor"),
     ("Normal", "NodeSocketColor"),
     ("Specular", "NodeSocketColor"),
+    ("Engine Specular", "NodeSocketColor"),  # S: the engine's specular, where a hit replaces it
 )
 
 # Debug views: enum value -> (label, description). REFLECTION is computed in the
@@ -62,54 +107,68 @@ DEBUG_VIEWS = (
     ("SPECULAR", "Specular", "Specular colour (rgb) of the specular buffer"),
     ("UV", "Reflected UV", "The reflected uv (u, v, 0) where a reflection was found"),
     ("VISIBILITY", "Visibility", "The reflection's visibility as grey"),
-    ("REFLECTION", "Reflection", "The premultiplied reflection before it is combined"),
+    ("REFLECTION", "Reflection", "What Glint changes in the frame: the reflection in, the engine's "
+                                 "own specular out where it is replaced"),
 )
 GBUFFER_DEBUG_VIEWS = ("POSITION", "NORMAL", "SPECULAR", "UV", "VISIBILITY")
 
+# The blur levels: (lod, sigma in pixels). Every second lod up to 2^8 = 256
+# pixels: the footprint of a roughness 0.5 lobe 240 pixels from its hit.
+HALF_ENERGY_SIGMA = 1.0 / (2.0 * math.sqrt(2.0 * math.log(2.0)))
+BLUR_LEVELS = tuple((float(lod), HALF_ENERGY_SIGMA * 2.0 ** lod) for lod in (2, 4, 6, 8))
+
+
+def _blur_node(sigma: float):
+    # Fast Gaussian's size is its sigma in pixels, an integer; the Size input
+    # scales it, which gives the exact sigma.
+    size = max(1, math.ceil(sigma))
+    return ("CompositorNodeBlur", {"filter_type": "FAST_GAUSS", "use_relative": False, "use_bokeh": False,
+                                   "use_gamma_correction": False, "use_extended_bounds": False,
+                                   "use_variable_size": False, "size_x": size, "size_y": size},
+            {1: sigma / size})
+
+
+def _mix(blend_type: str, defaults=None):
+    return ("CompositorNodeMixRGB", {"blend_type": blend_type, "use_alpha": False, "use_clamp": False},
+            defaults or {})
+
+
 # Node description: name -> (bl_idname, properties, {input index: default value}).
-# Inputs are addressed by index: Math nodes have two inputs both named "Value".
+# Inputs are addressed by index: Math nodes have several inputs named "Value".
 GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "uv_image": ("CompositorNodeImage", {"image": IMAGE_UV}, {}),
-    "mask_image": ("CompositorNodeImage", {"image": IMAGE_MASK}, {}),
+    "weight_image": ("CompositorNodeImage", {"image": IMAGE_WEIGHT}, {}),
     "debug_image": ("CompositorNodeImage", {"image": IMAGE_DEBUG}, {}),
     "position_image": ("CompositorNodeImage", {"image": IMAGE_POSITION}, {}),
     "normal_image": ("CompositorNodeImage", {"image": IMAGE_NORMAL}, {}),
     "specular_image": ("CompositorNodeImage", {"image": IMAGE_SPECULAR}, {}),
     # alpha = 0: no fading by uv derivatives, so Map UV only premultiplies by vis.
     "map_uv": ("CompositorNodeMapUV", {"alpha": 0}, {}),
-    # Flat = Blender's box filter: 2 size + 1 equal taps per axis.
-    "blur": ("CompositorNodeBlur", {"filter_type": "FLAT", "use_relative": False, "use_bokeh": False,
-                                    "use_gamma_correction": False, "use_extended_bounds": False,
-                                    "use_variable_size": False, "size_x": 8, "size_y": 8}, {1: 1.0}),
-    "sep_color": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    "sep_blur": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    "sep_mask": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
     "sep_uv": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    # amount = mean(spec.rgb), r = 1 - clamp(spec.a, 0, 1): the mask image is the
-    # rasterizer's specular buffer itself, handed over without a copy.
-    "amount_rg": ("CompositorNodeMath", {"operation": "ADD", "use_clamp": False}, {}),
-    "amount_rgb": ("CompositorNodeMath", {"operation": "ADD", "use_clamp": False}, {}),
-    "amount": ("CompositorNodeMath", {"operation": "DIVIDE", "use_clamp": False}, {1: 3.0}),
-    # 1 - a clamped to [0, 1] is 1 - clamp(a, 0, 1) for every a.
-    "rough": ("CompositorNodeMath", {"operation": "SUBTRACT", "use_clamp": True}, {0: 1.0}),
-    "mix_rough": ("CompositorNodeMixRGB", {"blend_type": "MIX", "use_alpha": False, "use_clamp": False}, {}),
-    "refl_rgb": ("CompositorNodeMixRGB", {"blend_type": "MULTIPLY", "use_alpha": False, "use_clamp": False},
-                 {0: 1.0}),
-    "one_minus_rough": ("CompositorNodeMath", {"operation": "SUBTRACT", "use_clamp": False}, {0: 1.0}),
-    "c_alpha": ("CompositorNodeMath", {"operation": "MULTIPLY", "use_clamp": False}, {}),
-    "b_alpha": ("CompositorNodeMath", {"operation": "MULTIPLY", "use_clamp": False}, {}),
-    "mixed_alpha": ("CompositorNodeMath", {"operation": "ADD", "use_clamp": False}, {}),
-    "refl_alpha": ("CompositorNodeMath", {"operation": "MULTIPLY", "use_clamp": True}, {}),
-    "one_minus_alpha": ("CompositorNodeMath", {"operation": "SUBTRACT", "use_clamp": False}, {0: 1.0}),
-    "base_scaled": ("CompositorNodeMixRGB", {"blend_type": "MULTIPLY", "use_alpha": False, "use_clamp": False},
-                    {0: 1.0}),
-    "combined": ("CompositorNodeMixRGB", {"blend_type": "ADD", "use_alpha": False, "use_clamp": False},
-                 {0: 1.0}),
-    "sep_refl": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    "refl_rgba": ("CompositorNodeCombineColor", {"mode": "RGB"}, {}),
+    "weighted": _mix("MULTIPLY", {0: 1.0}),        # C * W
+    "engine_specular": _mix("MULTIPLY", {0: 1.0}),  # S = light * colour
+    # Eevee writes its light passes divided by their colour: where the colour is
+    # 0 the light is inf or NaN and S NaN, which vis * S = 0 * NaN would carry
+    # into the frame. max(x, 0) per channel (Blender's MAXIMUM returns its
+    # second input when the first is NaN) makes S 0 there and nothing else.
+    "sep_specular": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    "finite_r": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
+    "finite_g": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
+    "finite_b": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
+    "finite_specular": ("CompositorNodeCombineColor", {"mode": "RGB"}, {3: 1.0}),
+    "delta": _mix("SUBTRACT"),                      # C * W - vis * S
+    "use_blur": ("CompositorNodeSwitch", {"check": True}, {}),
+    "combined": _mix("ADD", {0: 1.0}),              # frame + R
     "show_reflection": ("CompositorNodeSwitch", {"check": False}, {}),
     "show_debug": ("CompositorNodeSwitch", {"check": False}, {}),
 }
+for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
+    _lo = BLUR_LEVELS[_j - 2][0] if _j > 1 else 0.0
+    GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma)
+    # s_j = clamp(lod / (lod_j - lod_{j-1}) - lod_{j-1} / (lod_j - lod_{j-1}), 0, 1)
+    GROUP_NODES[f"level_{_j}"] = ("CompositorNodeMath", {"operation": "MULTIPLY_ADD", "use_clamp": True},
+                                  {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
+    GROUP_NODES[f"mix_{_j}"] = _mix("MIX")
 
 GROUP_IN = "__input__"
 GROUP_OUT = "__output__"
@@ -119,58 +178,51 @@ GROUP_OUT = "__output__"
 GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     (GROUP_IN, 0, "map_uv", 0),
     ("uv_image", 0, "map_uv", 1),
-    ("map_uv", 0, "blur", 0),
-    ("map_uv", 0, "sep_color", 0),
-    ("blur", 0, "sep_blur", 0),
-    ("mask_image", 0, "sep_mask", 0),
     ("uv_image", 0, "sep_uv", 0),
-    ("sep_mask", 0, "amount_rg", 0),
-    ("sep_mask", 1, "amount_rg", 1),
-    ("amount_rg", 0, "amount_rgb", 0),
-    ("sep_mask", 2, "amount_rgb", 1),
-    ("amount_rgb", 0, "amount", 0),
-    ("sep_mask", 3, "rough", 1),
-    # rgb: mix(C, B, r) * amount
-    ("rough", 0, "mix_rough", 0),
-    ("map_uv", 0, "mix_rough", 1),
-    ("blur", 0, "mix_rough", 2),
-    ("mix_rough", 0, "refl_rgb", 1),
-    ("amount", 0, "refl_rgb", 2),
-    # alpha: (C.a (1 - r) + B.a r) * amount, clamped to [0, 1]
-    ("rough", 0, "one_minus_rough", 1),
-    ("sep_color", 3, "c_alpha", 0),
-    ("one_minus_rough", 0, "c_alpha", 1),
-    ("sep_blur", 3, "b_alpha", 0),
-    ("rough", 0, "b_alpha", 1),
-    ("c_alpha", 0, "mixed_alpha", 0),
-    ("b_alpha", 0, "mixed_alpha", 1),
-    ("mixed_alpha", 0, "refl_alpha", 0),
-    ("amount", 0, "refl_alpha", 1),
-    # over: base * (1 - a) + refl.rgb
-    ("refl_alpha", 0, "one_minus_alpha", 1),
-    (GROUP_IN, 0, "base_scaled", 1),
-    ("one_minus_alpha", 0, "base_scaled", 2),
-    ("base_scaled", 0, "combined", 1),
-    ("refl_rgb", 0, "combined", 2),
-    # the reflection as premultiplied rgba, for the debug view and the EXR
-    ("refl_rgb", 0, "sep_refl", 0),
-    ("sep_refl", 0, "refl_rgba", 0),
-    ("sep_refl", 1, "refl_rgba", 1),
-    ("sep_refl", 2, "refl_rgba", 2),
-    ("refl_alpha", 0, "refl_rgba", 3),
+    ("map_uv", 0, "weighted", 1),
+    ("weight_image", 0, "weighted", 2),
+    (GROUP_IN, 1, "engine_specular", 1),
+    (GROUP_IN, 2, "engine_specular", 2),
+    ("engine_specular", 0, "sep_specular", 0),
+    ("sep_specular", 0, "finite_r", 0),
+    ("sep_specular", 1, "finite_g", 0),
+    ("sep_specular", 2, "finite_b", 0),
+    ("finite_r", 0, "finite_specular", 0),
+    ("finite_g", 0, "finite_specular", 1),
+    ("finite_b", 0, "finite_specular", 2),
+    ("sep_uv", 2, "delta", 0),
+    ("weighted", 0, "delta", 1),
+    ("finite_specular", 0, "delta", 2),
+]
+for _j in range(1, len(BLUR_LEVELS) + 1):
+    _below = "delta" if _j == 1 else f"mix_{_j - 1}"
+    GROUP_LINKS += [
+        ("delta", 0, f"blur_{_j}", 0),
+        ("weight_image", 1, f"level_{_j}", 0),
+        (f"level_{_j}", 0, f"mix_{_j}", 0),
+        (_below, 0, f"mix_{_j}", 1),
+        (f"blur_{_j}", 0, f"mix_{_j}", 2),
+    ]
+GROUP_LINKS += [
+    # the Switch takes input 0 when off: the unblurred D, levels not run
+    ("delta", 0, "use_blur", 0),
+    (f"mix_{len(BLUR_LEVELS)}", 0, "use_blur", 1),
+    (GROUP_IN, 0, "combined", 1),
+    ("use_blur", 0, "combined", 2),
     # output switches: composited / reflection / G-buffer debug image
     ("combined", 0, "show_reflection", 0),
-    ("refl_rgba", 0, "show_reflection", 1),
+    ("use_blur", 0, "show_reflection", 1),
     ("show_reflection", 0, "show_debug", 0),
     ("debug_image", 0, "show_debug", 1),
     ("show_debug", 0, GROUP_OUT, 0),
-    ("refl_rgba", 0, GROUP_OUT, 1),
+    ("use_blur", 0, GROUP_OUT, 1),
     (GROUP_IN, 0, GROUP_OUT, 2),
     ("uv_image", 0, GROUP_OUT, 3),
     ("sep_uv", 2, GROUP_OUT, 4),
     ("position_image", 0, GROUP_OUT, 5),
     ("normal_image", 0, GROUP_OUT, 6),
     ("specular_image", 0, GROUP_OUT, 7),
+    ("finite_specular", 0, GROUP_OUT, 8),
 ]
 
 # Layers of the multilayer EXR written beside the output: slot name -> group output.
@@ -183,12 +235,15 @@ EXR_LAYERS = (
     ("Specular", "Specular"),
     ("UV", "UV"),
     ("Visibility", "Visibility"),
+    ("EngineSpecular", "Engine Specular"),
 )
 
 
-def switch_states(debug_view: str) -> Dict[str, bool]:
-    """The two Switch nodes' ``check`` for a debug view."""
-    return {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS}
+def switch_states(debug_view: str, use_blur: bool = True) -> Dict[str, bool]:
+    """The Switch nodes' ``check`` for a debug view and whether any reflective
+    surface in the frame is rough."""
+    return {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
+            "use_blur": bool(use_blur)}
 
 
 # ----------------------------------------------------------------------------
@@ -310,6 +365,23 @@ def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
     return np.nan_to_num(out, nan=0.0, posinf=0.0, neginf=0.0)
 
 
+
+def weight_image(weight: np.ndarray, lod: np.ndarray) -> np.ndarray:
+    """The weight image: the core's specular weight (rgb) with the cone blur's
+    lod in alpha, in place in ``weight`` (a fresh array from the core)."""
+    out = np.asarray(weight, dtype=np.float32)
+    out[..., 3] = lod
+    return out
+
+
+def any_rough(specular: np.ndarray, uv: np.ndarray, lod: Optional[np.ndarray] = None) -> bool:
+    """Whether the blur levels have anything to do: some pixel with a hit has a
+    footprint wider than a pixel (lod > 0)."""
+    if lod is not None:
+        return bool(np.any(lod > 0.0))
+    return bool(np.any((np.asarray(uv)[..., 2] > 0) & (np.asarray(specular)[..., 3] < 1.0)))
+
+
 # ----------------------------------------------------------------------------
 # The group on numpy arrays
 
@@ -327,6 +399,8 @@ def _blend(props, fac, c1, c2):
         out[..., :3] = c1[..., :3] * ((1.0 - fac) + fac * c2[..., :3])
     elif mode == "ADD":
         out[..., :3] = c1[..., :3] + fac * c2[..., :3]
+    elif mode == "SUBTRACT":
+        out[..., :3] = c1[..., :3] - fac * c2[..., :3]
     else:
         raise ValueError(f"blend_type {mode!r} is not modelled")
     return out.astype(np.float32)
@@ -337,29 +411,41 @@ def _as_colour(v, shape):
     v = np.asarray(v, dtype=np.float32)
     if v.shape == tuple(shape):
         return v
+    if v.shape == (4,):  # an unlinked colour socket's default
+        return np.broadcast_to(v, tuple(shape)).astype(np.float32)
     out = np.ones(shape, np.float32)
     out[..., :3] = np.broadcast_to(v, tuple(shape[:-1]))[..., None]
     return out
 
 
+_MATH = {"ADD": lambda a, b, c: a + b, "SUBTRACT": lambda a, b, c: a - b, "MULTIPLY": lambda a, b, c: a * b,
+         "DIVIDE": lambda a, b, c: a / b, "MULTIPLY_ADD": lambda a, b, c: a * b + c,
+         "MAXIMUM": lambda a, b, c: np.where(a > b, a, b)}  # Blender's: a NaN a gives b
+
+
 def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    map_uv: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                   blur: Callable[[np.ndarray, int], np.ndarray], blur_size: int,
-                   debug_view: str = "NONE") -> Dict[str, np.ndarray]:
+                   blur: Callable[[np.ndarray, float], np.ndarray],
+                   specular_light: Optional[np.ndarray] = None, specular_color: Optional[np.ndarray] = None,
+                   debug_view: str = "NONE", use_blur: bool = True) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
 
-    ``map_uv(image, uv_rgba)`` and ``blur(image, size)`` stand in for Blender's
-    Map UV and Blur nodes (e.g. bilinear lookup and a clamp-to-edge box, the
-    core's, to check the wiring; Blender's own filters differ slightly).
+    ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
+    Map UV and Fast Gaussian (e.g. a bilinear lookup and an exact Gaussian, to
+    check the wiring; Blender's own filters differ slightly). The engine's
+    passes default to black, as an unlinked group input is.
     Returns the group's outputs by name.
     """
     base = np.asarray(base, dtype=np.float32)
     shape = base.shape
+    black = np.array((0.0, 0.0, 0.0, 1.0), np.float32)
+    group_in = [base, black if specular_light is None else np.asarray(specular_light, np.float32),
+                black if specular_color is None else np.asarray(specular_color, np.float32)]
     incoming: Dict[Tuple[str, int], Tuple[str, int]] = {}
     for src, so, dst, di in GROUP_LINKS:
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
-    switches = switch_states(debug_view)
+    switches = switch_states(debug_view, use_blur)
 
     def inp(node, index):
         link = incoming.get((node, index))
@@ -372,28 +458,26 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
         if key in cache:
             return cache[key]
         if node == GROUP_IN:
-            value = base
+            value = group_in[index]
         else:
             kind, props, _ = GROUP_NODES[node]
             if kind == "CompositorNodeImage":
                 value = np.asarray(images[props["image"]], dtype=np.float32)
                 if index == 1:
                     value = value[..., 3]
-            elif kind == "CompositorNodeMapUV":
-                value = map_uv(inp(node, 0), inp(node, 1))
-            elif kind == "CompositorNodeBlur":
-                value = blur(inp(node, 0), blur_size)
-            elif kind == "CompositorNodeSeparateColor":
-                value = _as_colour(inp(node, 0), shape)[..., index]
             elif kind == "CompositorNodeCombineColor":
                 value = np.stack([np.broadcast_to(np.asarray(inp(node, i), np.float32), shape[:-1])
                                   for i in range(4)], axis=-1)
+            elif kind == "CompositorNodeMapUV":
+                value = map_uv(inp(node, 0), inp(node, 1))
+            elif kind == "CompositorNodeBlur":
+                value = blur(inp(node, 0), props["size_x"] * inp(node, 1))
+            elif kind == "CompositorNodeSeparateColor":
+                value = _as_colour(inp(node, 0), shape)[..., index]
             elif kind == "CompositorNodeMath":
-                a = np.asarray(inp(node, 0), np.float32)
-                b = np.asarray(inp(node, 1), np.float32)
-                op = props["operation"]
-                value = {"ADD": lambda: a + b, "SUBTRACT": lambda: a - b, "MULTIPLY": lambda: a * b,
-                         "DIVIDE": lambda: a / b}[op]()
+                a, b, c = (np.asarray(inp(node, i) if inp(node, i) is not None else 0.0, np.float32)
+                           for i in range(3))
+                value = _MATH[props["operation"]](a, b, c)
                 if props["use_clamp"]:
                     value = np.clip(value, 0.0, 1.0)
                 value = np.broadcast_to(value, shape[:-1]).astype(np.float32)

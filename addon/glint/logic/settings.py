@@ -21,8 +21,6 @@ PARAMETERS = {
               "Iteration budget; what it counts for each march is in the March tooltip"),
     "thickness": (0.5, 1e-5, 1e6, 0.01, 10.0,
                   "How deep surfaces are behind their front, in scene units (per march: March tooltip)"),
-    "blur_size": (8, 0, 128, 0, 32,
-                  "Half-width of the box blur for rough surfaces: a (2 size + 1)^2 box, 0 = none"),
 }
 
 BACKENDS = (
