@@ -22,7 +22,7 @@ DETAILS = {
 
 
 def test_parameter_defaults_are_the_seeds():
-    for key in ("max_distance", "resolution", "steps", "thickness", "blur_size"):
+    for key in ("max_distance", "resolution", "steps", "thickness"):
         assert key in s.PARAMETERS
     assert s.PARAMETERS["max_distance"][0] == 15.0 and s.PARAMETERS["thickness"][0] == 0.5
 
