@@ -81,7 +81,8 @@ def test_the_panel_says_what_was_turned_on_and_off_restores_it(old_files, blende
     log = blender.run([old_files["compositing_off"], "--addons", "glint", "--python-expr", code])
     assert "Post Processing > Compositing" in next(l for l in log.splitlines() if l.startswith("Glint: scene"))
     labels = next(l for l in log.splitlines() if l.startswith("LABELS"))
-    assert "Glint turned on Post Processing > Compositing for its reflections" in labels, labels
+    assert "Glint turned on Post Processing > Compositing and Eevee's Specular Light and Color passes " \
+           "for its reflections" in labels, labels
     # Switching Glint off again gives the file its own settings back.
     assert "AFTER True False" in log, log[-2000:]
 
@@ -107,7 +108,7 @@ def test_a_group_saved_by_an_older_glint_is_rebuilt_and_the_frame_is_not_black(
     code = ("from glint import compositor\n"
             "g = compositor.find_group()\n"
             "g[compositor.LAYOUT_KEY] = 'older'\n"
-            "g.nodes.remove(g.nodes['blur'])\n")
+            "g.nodes.remove(g.nodes['combined'])\n")
     log = blender.run([samples["mirror_floor"], "--addons", "glint", "--python-expr",
                        code + SAVE.format(code="", path=path)])
     assert "SAVED" in log, log[-2000:]
