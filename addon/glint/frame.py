@@ -122,9 +122,11 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             log(f"march '{kwargs['march']}' has no OpenGL form: it traces on the CPU")
         proj32 = cam.projection.astype(np.float32)
         with timings.measure("trace"):
-            n_trace = compositing.trace_normals(normal, position, specular, refl)
+            # The specular buffer skips the pixels that do not reflect; the normals of
+            # what they show stay, for the rays that hit them.
             uv, used = _with_backend(core, used, requested,
-                                     lambda b: core.trace(position, n_trace, proj32, backend=b, **kwargs))
+                                     lambda b: core.trace(position, normal, proj32, specular=specular,
+                                                          backend=b, **kwargs))
         report.backend = used
         progress.check()
         with timings.measure("images"):

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import compositor, gather
 from .frame import rasterize, settings_dict
-from .logic import compositing, geometry, measurement, settings as settings_logic
+from .logic import geometry, measurement, settings as settings_logic
 
 
 def frame_arrays(depsgraph, core, backend: str = "cpu") -> dict:
@@ -24,7 +24,7 @@ def frame_arrays(depsgraph, core, backend: str = "cpu") -> dict:
     cam = exp.camera
     return {
         "position": gbuf["position"], "specular": gbuf["specular"], "back_position": gbuf["back_position"],
-        "normal": compositing.trace_normals(gbuf["normal"], gbuf["position"], gbuf["specular"]),
+        "normal": gbuf["normal"],
         "projection": cam.projection, "vertices": vertices, "triangles": triangles,
     }
 
@@ -48,9 +48,11 @@ def measure(core, arrays: dict, kwargs: dict, backend: str, preset: str, repeat:
     if details["needs_mesh"]:
         kw["mesh"] = (arrays["vertices"], arrays["triangles"])
     p, n, proj = arrays["position"], arrays["normal"], arrays["projection"].astype(np.float32)
-    uv, ms = _timed(lambda: core.trace(p, n, proj, backend=backend, **kw), repeat)
+    spec = arrays["specular"]
+    uv, ms = _timed(lambda: core.trace(p, n, proj, specular=spec, backend=backend, **kw), repeat)
     exact, exact_ms = _timed(lambda: core.trace(p, n, proj, march="exact", max_distance=kwargs["max_distance"],
-                                                mesh=(arrays["vertices"], arrays["triangles"])), repeat)
+                                                mesh=(arrays["vertices"], arrays["triangles"]), specular=spec),
+                             repeat)
     figures = core.compare(uv, exact, specular=arrays["specular"])
     h, w = p.shape[:2]
     return dict(figures, ms=ms, exact_ms=exact_ms, preset=preset, width=w, height=h, backend=backend,

@@ -146,10 +146,10 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
                     g = rasterize(core, exp, backend)
                 if self._cancel.is_set():
                     return
-                n = compositing.trace_normals(g["normal"], g["position"], g["specular"])
                 proj = exp.camera.projection
                 with timings.measure("trace"):
-                    uv = core.trace(g["position"], n, proj.astype(np.float32), backend=backend, **kwargs)
+                    uv = core.trace(g["position"], g["normal"], proj.astype(np.float32), specular=g["specular"],
+                                    backend=backend, **kwargs)
                 self._result.update(g, uv=uv, projection=proj)
             except Exception as exc:  # reported by the modal loop
                 self._result["error"] = f"{type(exc).__name__}: {exc}"

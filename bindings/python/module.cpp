@@ -52,11 +52,12 @@ pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& nor
                              const pyb::handle& projection, float max_distance, float resolution,
                              int steps, float thickness, const std::string& march,
                              const pyb::handle& back_position, const pyb::handle& mesh,
-                             const std::string& backend, int threads, double memory_limit_mb) {
+                             const pyb::handle& specular, const std::string& backend, int threads,
+                             double memory_limit_mb) {
   // Before any copy: a 32768x32768 request must be refused with the memory still free.
   if (auto [w, h] = array_size(position); w > 0) {
     const uint64_t px = uint64_t(w) * uint64_t(h);
-    const int copies = back_position.is_none() ? 2 : 3;
+    const int copies = 2 + (back_position.is_none() ? 0 : 1) + (specular.is_none() ? 0 : 1);
     require_memory(binding_bytes(px, copies, 1) +
                        trace_bytes(w, h, march_info(march).id, backend != "cpu"),
                    "trace at " + std::to_string(w) + "x" + std::to_string(h), memory_limit_mb);
@@ -68,9 +69,10 @@ pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& nor
   const TraceOptions opt =
       trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
   const std::optional<Image> back = optional_image(back_position, "back_position", pos);
+  const std::optional<Image> spec = optional_image(specular, "specular", pos);
   const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
   auto be = get_backend(backend, threads);
-  TraceInputs in{pos, nrm, nullptr, proj};
+  TraceInputs in{pos, nrm, spec ? &*spec : nullptr, proj};
   in.back_position = back ? &*back : nullptr;
   in.mesh = tris ? &*tris : nullptr;
   Image uv;
@@ -228,13 +230,16 @@ PYBIND11_MODULE(glint_core, m) {
   m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
         "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
         "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
-        "backend"_a = "cpu", "threads"_a = 0, "memory_limit_mb"_a = 0.0,
+        "specular"_a = pyb::none(), "backend"_a = "cpu", "threads"_a = 0, "memory_limit_mb"_a = 0.0,
         "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
         "max_distance and thickness are view-space units; resolution in [0, 1];\n"
         "march: a name from marches(). back_position: optional float32 [H, W, 4], the\n"
         "surface behind each pixel (w = 0 where none), read by marches that use true\n"
         "thickness. mesh: (vertices float32 [N, 3], triangles int32 [M, 3]) in the same\n"
         "view space, for marches that trace the scene's triangles ('exact').\n"
+        "specular: optional float32 [H, W, 4], the specular buffer: pixels that do not reflect\n"
+        "(mean rgb 0) are not traced and report 0, as pipeline() does; their normals still\n"
+        "serve the rays that hit them.\n"
         "memory_limit_mb: MiB the call may allocate (0: GLINT_MEMORY_LIMIT_MB or half of\n"
         "physical memory); a larger request raises MemoryLimitExceeded (a MemoryError).");
   m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");

@@ -237,8 +237,6 @@ def test_mask_and_uv_images():
     position[0, 3, 0] = np.nan
     spec = np.array([[[0.3, 0.6, 0.9, 0.25], [0, 0, 0, 1], [1, 1, 1, 1], [1, 1, 1, 1]]], np.float32)
     assert np.array_equal(cg.reflective_mask(position, spec)[0], (True, False, False, False))
-    n = np.ones((1, 4, 4), np.float32)
-    assert np.array_equal(cg.trace_normals(n, position, spec)[0, :, 0], (1, 0, 0, 0))
     uv = np.full((1, 4, 4), 0.5, np.float32)
     assert np.array_equal(cg.uv_image(uv)[0, 0], (0.5, 0.5, 0.5, 1.0))
 

@@ -279,18 +279,6 @@ def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
     return seen
 
 
-def trace_normals(normal: np.ndarray, position: np.ndarray, specular: np.ndarray,
-                  refl: np.ndarray = None) -> np.ndarray:
-    """Normals with non-reflective pixels zeroed: the core reports (0, 0, 0, 0)
-    there without marching, as its pipeline does for pixels it does not trace."""
-    if refl is None:
-        refl = reflective_mask(position, specular)
-    n = np.asarray(normal, dtype=np.float32)
-    out = np.zeros(n.shape, np.float32)
-    np.copyto(out, n, where=refl[..., None])
-    return out
-
-
 def _dilate3(mask: np.ndarray) -> np.ndarray:
     """Pixels with a True pixel in their 3x3 neighbourhood, separably."""
     rows = mask.copy()
