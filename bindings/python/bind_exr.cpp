@@ -30,16 +30,18 @@ pyb::tuple py_read_exr(const pyb::handle& path_obj, double memory_limit_mb) {
   // Each layer is freed once copied, so the copies add one layer, not all.
   while (!file.layers.empty()) {
     auto node = file.layers.extract(file.layers.begin());
-    layers[pyb::str(node.key())] = array_from_image(node.mapped());
+    layers[lenient_str(node.key())] = array_from_image(node.mapped());
     width = node.mapped().width;
     height = node.mapped().height;
   }
   pyb::dict header;
   header["width"] = width;
   header["height"] = height;
-  header["compression"] = file.compression;
-  header["options"] = file.options;
-  header["skipped_channels"] = pyb::cast(file.skipped_channels);
+  header["compression"] = lenient_str(file.compression);
+  header["options"] = lenient_str(file.options);
+  pyb::list skipped;
+  for (const std::string& c : file.skipped_channels) skipped.append(lenient_str(c));
+  header["skipped_channels"] = skipped;
   if (file.projection) {
     pyb::array_t<double> p({4, 4});
     for (int i = 0; i < 16; ++i) p.mutable_data()[i] = file.projection->m[i];

@@ -113,4 +113,10 @@ std::optional<TriangleMesh> mesh_from_arg(const pyb::handle& obj) {
   return m;
 }
 
+pyb::str lenient_str(const std::string& text) {
+  PyObject* s = PyUnicode_DecodeUTF8(text.data(), static_cast<Py_ssize_t>(text.size()), "backslashreplace");
+  if (!s) throw pyb::error_already_set();
+  return pyb::reinterpret_steal<pyb::str>(s);
+}
+
 }  // namespace glint::py

@@ -30,6 +30,11 @@ std::pair<int, int> array_size(const pyb::handle& obj);
 uint64_t binding_bytes(uint64_t pixels, int images, int outputs);
 // An RGBA Image as a new float32 [H, W, 4] array.
 pyb::array_t<float> array_from_image(const Image& img);
+
+// Text that came from a file or quotes one (EXR layer and attribute names, error
+// messages naming them) as a Python str: bytes that are not UTF-8 become
+// backslash escapes instead of a UnicodeDecodeError in place of the answer.
+pyb::str lenient_str(const std::string& text);
 // None, or (vertices float32 [N, 3], triangles int32 [M, 3]) as a validated
 // mesh; anything else raises ValueError naming `mesh`.
 std::optional<TriangleMesh> mesh_from_arg(const pyb::handle& obj);

@@ -40,6 +40,12 @@ TraceOptions trace_options(float max_distance, float resolution, int steps, floa
   return o;
 }
 
+// An error message as Python text: it may quote bytes of a file that are not
+// UTF-8 (lenient_str).
+pyb::str message_text(const char* what) { return lenient_str(what); }
+
+void set_python_error(PyObject* type, const char* what) { PyErr_SetObject(type, message_text(what).ptr()); }
+
 // An optional image argument: None, or an array of the position buffer's size.
 std::optional<Image> optional_image(const pyb::handle& obj, const char* name, const Image& like) {
   if (obj.is_none()) return std::nullopt;
@@ -199,15 +205,19 @@ PYBIND11_MODULE(glint_core, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InvalidArgument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      set_python_error(PyExc_ValueError, e.what());
     } catch (const BackendUnavailable& e) {
-      PyErr_SetString(backend_unavailable.ptr(), e.what());
+      set_python_error(backend_unavailable.ptr(), e.what());
     } catch (const MemoryLimitExceeded& e) {
       // Sizes as attributes, so a caller can work out how far to scale down.
-      pyb::object exc = pyb::handle(memory_limit_exceeded.ptr())(e.what());
+      pyb::object exc = pyb::handle(memory_limit_exceeded.ptr())(message_text(e.what()));
       exc.attr("needed_bytes") = e.needed_bytes();
       exc.attr("limit_bytes") = e.limit_bytes();
       PyErr_SetObject(memory_limit_exceeded.ptr(), exc.ptr());
+    } catch (const pyb::builtin_exception&) {
+      throw;  // pybind11's own: its translator knows them
+    } catch (const std::runtime_error& e) {
+      set_python_error(PyExc_RuntimeError, e.what());
     }
   });
 

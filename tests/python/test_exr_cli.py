@@ -263,3 +263,12 @@ def test_runtime_failures_exit_1_with_the_reason(result):
     proc = run(bare, tmp / "x.exr")
     assert proc.returncode == 1 and "glintProjection" in proc.stderr
     assert not (tmp / "x.exr").exists()
+
+
+def test_layer_names_that_are_not_utf8_read_as_escapes():
+    """Found by fuzz_exr: a valid file whose layer names hold bytes that are not
+    UTF-8 made read_exr raise UnicodeDecodeError instead of returning the layers."""
+    import glint_core
+    layers, header = glint_core.read_exr(Path(__file__).parent / "data" / "exr_non_utf8_layer_names.exr")
+    assert "nor\\x8a\\x9el" in layers and "normal" in layers
+    assert all(isinstance(k, str) for k in layers)
