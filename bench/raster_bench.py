@@ -75,7 +75,10 @@ MATERIALS = np.array([[0.5, 0.5, 0.5, 127.75], [0.9, 0.1, 0.1, 40.0], [0.1, 0.9,
 
 
 def worker(build, w, h, counts, backends, repeat):
-    """One process, one build: {"<tris> <backend> <back>": [ms, ...]}."""
+    """One process, one build: {"<tris> <backend> <back>": [(wall ms, cpu ms), ...]}.
+
+    cpu ms is the process's CPU time over all its threads (GL's llvmpipe threads too):
+    on a shared machine it moves less than the wall time does."""
     sys.path.insert(0, os.path.join(os.path.abspath(build), "python"))
     import glint_core
     proj = perspective(w, h)
@@ -88,9 +91,9 @@ def worker(build, w, h, counts, backends, repeat):
                 call()  # warm-up: the GL context, first-touch of the allocator's pages
                 times = []
                 for _ in range(repeat):
-                    t0 = time.perf_counter()
+                    t0, c0 = time.perf_counter(), time.process_time()
                     call()
-                    times.append((time.perf_counter() - t0) * 1e3)
+                    times.append(((time.perf_counter() - t0) * 1e3, (time.process_time() - c0) * 1e3))
                 out[f"{len(p)} {be} {int(back)}"] = times
     return out
 
@@ -122,15 +125,19 @@ def main():
             for k, v in got.items():
                 results[b].setdefault(k, []).extend(v)
     keys = list(results[builds[0]])
-    print(f"rasterize at {w}x{h}, median ms of {a.rounds} x {a.repeat} calls per cell")
-    print(f"{'triangles':>9} {'backend':>7} {'back':>4} " + " ".join(f"{os.path.relpath(b):>20}" for b in builds)
-          + ("  ratio" if len(builds) == 2 else ""))
+    print(f"rasterize at {w}x{h}: median wall ms (cpu ms, all threads) of {a.rounds} x {a.repeat} calls per cell")
+    for i, b in enumerate(builds):
+        print(f"  build {i}: {b}")
+    print(f"{'triangles':>9} {'backend':>7} {'back':>4} " + " ".join(f"{'build ' + str(i):>17}" for i in range(len(builds)))
+          + ("  wall ratio 1/0" if len(builds) == 2 else ""))
     for k in keys:
         tris, be, back = k.split()
-        meds = [statistics.median(results[b][k]) for b in builds]
-        line = f"{tris:>9} {be:>7} {'yes' if back == '1' else 'no':>4} " + " ".join(f"{v:20.1f}" for v in meds)
+        meds = [(statistics.median(t[0] for t in results[b][k]), statistics.median(t[1] for t in results[b][k]))
+                for b in builds]
+        line = f"{tris:>9} {be:>7} {'yes' if back == '1' else 'no':>4} " + " ".join(
+            f"{wall:8.1f} ({cpu:6.1f})" for wall, cpu in meds)
         if len(builds) == 2:
-            line += f"  {meds[1] / meds[0]:5.2f}"
+            line += f"  {meds[1][0] / meds[0][0]:15.2f}"
         print(line, flush=True)
 
 
