@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,19 @@ std::vector<int32_t> int32_values(const pyb::handle& obj, const char* name, cons
   return out;
 }
 
+// The image's pixels become the array's memory, kept alive by a capsule: at
+// 1920x1080 each G-buffer is 33 MB, and a copy would cost fresh pages
+// (faults, zeroing) plus the copy itself on every frame.
+pyb::array_t<float> array_taking(Image&& img) {
+  auto pixels = std::make_unique<std::vector<float>>(std::move(img.data));
+  float* data = pixels->data();
+  pyb::capsule owner(pixels.get(), [](void* p) { delete static_cast<std::vector<float>*>(p); });
+  pixels.release();  // the capsule owns it now
+  return pyb::array_t<float>({static_cast<pyb::ssize_t>(img.height), static_cast<pyb::ssize_t>(img.width),
+                              static_cast<pyb::ssize_t>(4)},
+                             data, owner);
+}
+
 pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                        const pyb::handle& material_index, const pyb::handle& materials,
                        const pyb::handle& projection, int width, int height, const pyb::handle& uvs,
@@ -85,17 +99,15 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                        const pyb::handle& normal_maps, bool back_layer, const std::string& backend,
                        int threads, double memory_limit_mb) {
   // Before any copy: the triangles' copies (positions, normals, index, uvs,
-  // tangents: 4 * (9 + 9 + 1 + 6 + 12) bytes each), the output arrays, and the
-  // backend's own buffers.
+  // tangents: 4 * (9 + 9 + 1 + 6 + 12) bytes each) and the backend's own
+  // buffers, whose images become the output arrays.
   if (width >= 1 && height >= 1 && width <= kMaxImageSide && height <= kMaxImageSide) {
     uint64_t tris = 0;
     if (pyb::isinstance<pyb::array>(positions)) {
       const auto a = pyb::reinterpret_borrow<pyb::array>(positions);
       if (a.ndim() >= 1) tris = static_cast<uint64_t>(a.shape(0));
     }
-    const uint64_t px = uint64_t(width) * uint64_t(height);
-    require_memory(tris * 4 * 37 + px * 16 * (back_layer ? 4 : 3) +
-                       raster_bytes(width, height, tris, back_layer, backend != "cpu"),
+    require_memory(tris * 4 * 37 + raster_bytes(width, height, tris, back_layer, backend != "cpu"),
                    "rasterize at " + std::to_string(width) + "x" + std::to_string(height),
                    memory_limit_mb);
   }
@@ -161,10 +173,10 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
     g = be->rasterize(in);
   }
   pyb::dict out;
-  out["position"] = array_from_image(g.position);
-  out["normal"] = array_from_image(g.normal);
-  out["specular"] = array_from_image(g.specular);
-  if (back_layer) out["back_position"] = array_from_image(g.back_position);
+  out["position"] = array_taking(std::move(g.position));
+  out["normal"] = array_taking(std::move(g.normal));
+  out["specular"] = array_taking(std::move(g.specular));
+  if (back_layer) out["back_position"] = array_taking(std::move(g.back_position));
   return out;
 }
 

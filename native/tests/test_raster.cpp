@@ -519,6 +519,51 @@ TEST(Raster, ResultDoesNotDependOnTheThreadCount) {
   EXPECT_EQ(one.specular.data, four.specular.data);
 }
 
+// More triangles than the rasterizer sets up at once (65536): the layers
+// still come out as the analytic scene has them, across the chunks. A wall
+// at z = -10 and a back face at z = -12 behind its left half come first; then
+// 70000 triangles behind the eye; then a slab (front face at z = -5, back
+// face at z = -8, 4 x 4 wide). Under the square 90-degree camera a point
+// (x, y, z) is seen at ndc (x / -z, y / -z).
+TEST(Raster, MoreTrianglesThanOneChunkKeepBothLayers) {
+  const int w = 64, h = 64;
+  std::vector<Tri> tris = quad(-20, -20, 20, 20, -10.0, false, 0);
+  const auto left_back = quad(-20, -20, 0, 20, -12.0, true, 0);
+  tris.insert(tris.end(), left_back.begin(), left_back.end());
+  const double a[3] = {0, 0, 1}, b[3] = {1, 0, 1}, c[3] = {0, 1, 2}, n[3] = {0, 0, 1};
+  tris.insert(tris.end(), 70000, flat(a, b, c, n));
+  for (const auto& part : {quad(-2, -2, 2, 2, -5.0, false, 1), quad(-2, -2, 2, 2, -8.0, true, 1)})
+    tris.insert(tris.end(), part.begin(), part.end());
+  const Mesh mesh = make_mesh(tris);
+  const auto mats = default_materials();
+  const std::vector<Image> maps;
+  RasterInputs in{mesh, mats, maps, square_perspective(), w, h};
+  in.back_layer = true;
+  const GBufferImages g = cpu::rasterize(in, 2);
+
+  int checked = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double nx = (x + 0.5) / w * 2 - 1, ny = (y + 0.5) / h * 2 - 1;
+      const double r = std::max(std::fabs(nx), std::fabs(ny));
+      // Away from every edge of the scene (0.4 and 0.25: the slab's faces).
+      if (std::fabs(r - 0.4) < 0.05 || std::fabs(r - 0.25) < 0.05 || std::fabs(nx) < 0.05) continue;
+      const double front = r < 0.4 ? -5.0 : -10.0;
+      const double back = r < 0.25 ? -8.0 : (nx < 0 ? -12.0 : 0.0);
+      const float* p = g.position.px(x, y);
+      ASSERT_NEAR(p[0], nx * -front, 1e-5 * -front) << x << "," << y;
+      ASSERT_NEAR(p[1], ny * -front, 1e-5 * -front) << x << "," << y;
+      ASSERT_NEAR(p[2], front, 1e-5 * -front) << x << "," << y;
+      EXPECT_EQ(g.specular.px(x, y)[0], r < 0.4 ? 1.0f : 0.25f) << x << "," << y;
+      EXPECT_EQ(g.normal.px(x, y)[2], 1.0f) << x << "," << y;
+      const float* q = g.back_position.px(x, y);
+      ASSERT_EQ(q[3], back != 0.0 ? 1.0f : 0.0f) << x << "," << y;
+      if (back != 0.0) ASSERT_NEAR(q[2], back, 1e-5 * -back) << x << "," << y;
+      ++checked;
+    }
+  EXPECT_GT(checked, w * h / 2);
+}
+
 TEST(Raster, NonFiniteCornersSkipTheTriangleOnly) {
   auto tris = quad(-0.5, -0.5, 0.5, 0.5, -2.0);
   tris[0].p[1][0] = std::nan("");

@@ -11,17 +11,24 @@
 //   triangle in double precision (homogeneous barycentrics, which are the
 //   perspective-correct ones), so positions lie on the exact ray and plane.
 //
-// Triangles are processed in chunks (bounded memory for any count): set up
-// and binned into row bands in parallel, then rasterized band by band into a
-// depth + triangle-id buffer. A final pass shades only the winning triangle
-// of each pixel (normals, normal maps, material), so overdraw costs only the
-// depth test.
+// Triangles are set up (clip, snap) and binned into bands of rows in
+// parallel, then each band is rasterized into a depth + triangle-id buffer;
+// shading reads only the winning triangle of each pixel (normals, normal
+// maps, material), so overdraw costs only the depth test. Up to one chunk of
+// triangles (the usual frame), a thread finishes a band at once (front test,
+// back-face test, shading) in a band-sized buffer; more than that goes chunk
+// by chunk (bounded memory for any count) into frame-sized buffers.
 #include "raster.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 #include "glint/errors.h"
 #include "glint/memory.h"
@@ -367,124 +374,204 @@ Vec3 apply_normal_map(const RasterInputs& in, const Image& map, size_t tri, cons
 // count: coplanar duplicates and the front triangle's own back side do not.
 constexpr double kBackSeparation = 1e-6;
 
-GBufferImages rasterize(const RasterInputs& in, int threads) {
-  validate(in);
-  require_raster_memory(in, false);
-  const int width = in.width, height = in.height;
-  const Mesh& mesh = in.mesh;
-  const Mat4& proj = in.projection;
-  const size_t count = mesh.triangle_count();
-  const size_t pixels = static_cast<size_t>(width) * height;
-  const double inv_w2 = 1.0 / width, inv_h2 = 1.0 / height;
+namespace {
 
-  std::vector<double> depth(pixels, std::numeric_limits<double>::infinity());
-  std::vector<int32_t> winner(pixels, -1);
-
-  const int nthreads = resolve_threads(threads);
-  const int band_rows = std::max(8, (height + 255) / 256);
-  const int bands = (height + band_rows - 1) / band_rows;
-  std::vector<TriPlane> planes;
-
+// One chunk of triangles, set up and binned into bands of rows.
+struct Chunk {
   struct Slice {
     std::vector<ScreenTri> tris;
     std::vector<std::vector<uint32_t>> bins;  // per band: indices into tris, in triangle order
   };
+  size_t begin = 0;
+  std::vector<TriPlane> planes;  // per triangle of the chunk (valid where it has screen triangles)
+  std::vector<Slice> slices;
+};
 
-  // One pass over every triangle: fragment(triangle, plane, pixel index,
-  // view distance) for each pixel centre it covers, bands of rows in parallel
-  // (a pixel is only ever touched by the thread that owns its band).
-  auto raster_pass = [&](auto&& fragment) {
-    for (size_t begin = 0; begin < count; begin += kChunk) {
-      const size_t n = std::min(kChunk, count - begin);
-      planes.resize(n);
-      // Slices are contiguous runs of triangles so that walking them in order
-      // keeps submission order, which makes depth ties deterministic.
-      const int slices = static_cast<int>(std::min<size_t>((n + 1023) / 1024, size_t(nthreads) * 4));
-      std::vector<Slice> slice(slices);
-      auto setup_slice = [&](int s) {
-        const size_t a = n * s / slices, b = n * (s + 1) / slices;
-        Slice& sl = slice[s];
-        sl.bins.assign(bands, {});
-        for (size_t k = a; k < b; ++k) {
-          const size_t tri = begin + k;
-          const float* corners = mesh.positions.data() + tri * 9;
-          const size_t first = sl.tris.size();
-          setup_triangle(corners, proj, width, height, static_cast<int32_t>(tri), sl.tris);
-          if (sl.tris.size() == first) continue;
-          if (!make_plane(corners, proj, planes[k])) {
-            sl.tris.resize(first);  // seen edge-on through the eye: covers nothing
-            continue;
-          }
-          for (size_t q = first; q < sl.tris.size(); ++q) {
-            const ScreenTri& t = sl.tris[q];
-            for (int band = t.j_lo / band_rows; band <= t.j_hi / band_rows; ++band)
-              sl.bins[band].push_back(static_cast<uint32_t>(q));
-          }
-        }
-      };
-      parallel_rows(0, slices, threads, setup_slice);  // binning allocates: failures come back here
-      parallel_rows(0, bands, threads, [&](int band) {
-        const int r0 = band * band_rows, r1 = std::min(height, r0 + band_rows) - 1;
-        for (const Slice& sl : slice) {
-          for (uint32_t q : sl.bins[band]) {
-            const ScreenTri& t = sl.tris[q];
-            const TriPlane& pl = planes[t.tri - begin];
-            for_each_span(t, std::max(t.j_lo, r0), std::min(t.j_hi, r1), [&](int j, int i0, int i1) {
-              const size_t row = static_cast<size_t>(j) * width;
-              for (int i = i0; i <= i1; ++i) {
-                double b[3];
-                if (!barycentric(pl, i, j, inv_w2, inv_h2, b)) continue;
-                fragment(t.tri, pl, row + i, -(b[0] * pl.z[0] + b[1] * pl.z[1] + b[2] * pl.z[2]));
-              }
-            });
+// The depth-test state of a run of rows, each pointer at the run's first row.
+struct DepthRows {
+  double* depth;
+  int32_t* winner;
+  double* back_depth;  // null without the back layer
+  int32_t* back_winner;
+};
+
+// A zeroed width x height image. At 1920x1080 each is 33 MB of fresh pages
+// every call, and faulting them in 4 KiB at a time cost more than all the
+// rasterizing; on Linux they are asked to be 2 MiB pages before the first
+// touch (a hint: where it is refused, nothing else changes).
+Image blank_image(int width, int height) {
+  Image img;
+  img.width = width;
+  img.height = height;
+  const size_t n = static_cast<size_t>(width) * height * 4;
+  img.data.reserve(n);
+#ifdef MADV_HUGEPAGE
+  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
+  const uintptr_t a = reinterpret_cast<uintptr_t>(img.data.data());
+  const uintptr_t lo = (a + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t hi = (a + n * sizeof(float)) & ~(kHuge - 1);
+  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+#endif
+  img.data.resize(n);
+  return img;
+}
+
+class Rasterizer {
+ public:
+  Rasterizer(const RasterInputs& in, int threads)
+      : in_(in),
+        threads_(threads),
+        width_(in.width),
+        height_(in.height),
+        band_rows_(std::max(8, (in.height + 255) / 256)),
+        bands_((in.height + band_rows_ - 1) / band_rows_),
+        inv_w2_(1.0 / in.width),
+        inv_h2_(1.0 / in.height) {}
+
+  GBufferImages run();
+
+ private:
+  void setup_chunk(size_t begin, Chunk& c) const;
+  // The depth tests of the band's rows against the chunk's triangles.
+  void front_band(const Chunk& c, int band, const DepthRows& rows) const;
+  void back_band(const Chunk& c, int band, const DepthRows& rows) const;
+  // Writes the G-buffers of the band's pixels from the winners. With `planes`
+  // (the whole mesh in one chunk) a winner's plane is looked up, not rebuilt.
+  void shade_band(int band, const DepthRows& rows, const std::vector<TriPlane>* planes);
+  void clear_rows(const DepthRows& rows, size_t n) const;
+
+  int row0(int band) const { return band * band_rows_; }
+  int row1(int band) const { return std::min(height_, row0(band) + band_rows_) - 1; }
+
+  const RasterInputs& in_;
+  const int threads_;
+  const int width_, height_, band_rows_, bands_;
+  const double inv_w2_, inv_h2_;
+  GBufferImages out_;
+};
+
+void Rasterizer::setup_chunk(size_t begin, Chunk& c) const {
+  const Mesh& mesh = in_.mesh;
+  const size_t n = std::min(kChunk, mesh.triangle_count() - begin);
+  c.begin = begin;
+  c.planes.resize(n);
+  // Slices are contiguous runs of triangles so that walking them in order
+  // keeps submission order, which makes depth ties deterministic.
+  const int slices = static_cast<int>(std::min<size_t>((n + 1023) / 1024, size_t(resolve_threads(threads_)) * 4));
+  c.slices.assign(slices, {});
+  auto setup_slice = [&](int s) {
+    const size_t a = n * s / slices, b = n * (s + 1) / slices;
+    Chunk::Slice& sl = c.slices[s];
+    sl.bins.assign(bands_, {});
+    for (size_t k = a; k < b; ++k) {
+      const size_t tri = begin + k;
+      const float* corners = mesh.positions.data() + tri * 9;
+      const size_t first = sl.tris.size();
+      setup_triangle(corners, in_.projection, width_, height_, static_cast<int32_t>(tri), sl.tris);
+      if (sl.tris.size() == first) continue;
+      if (!make_plane(corners, in_.projection, c.planes[k])) {
+        sl.tris.resize(first);  // seen edge-on through the eye: covers nothing
+        continue;
+      }
+      for (size_t q = first; q < sl.tris.size(); ++q) {
+        const ScreenTri& t = sl.tris[q];
+        for (int band = t.j_lo / band_rows_; band <= t.j_hi / band_rows_; ++band)
+          sl.bins[band].push_back(static_cast<uint32_t>(q));
+      }
+    }
+  };
+  parallel_rows(0, slices, threads_, setup_slice);  // binning allocates: failures come back here
+}
+
+// Each covered pixel centre of the band: a depth test on the view distance,
+// the smaller wins (ties: the earlier triangle, walked first).
+void Rasterizer::front_band(const Chunk& c, int band, const DepthRows& rows) const {
+  const int r0 = row0(band), r1 = row1(band);
+  for (const Chunk::Slice& sl : c.slices) {
+    for (uint32_t q : sl.bins[band]) {
+      const ScreenTri& t = sl.tris[q];
+      const TriPlane& pl = c.planes[t.tri - c.begin];
+      for_each_span(t, std::max(t.j_lo, r0), std::min(t.j_hi, r1), [&](int j, int i0, int i1) {
+        const size_t row = static_cast<size_t>(j - r0) * width_;
+        for (int i = i0; i <= i1; ++i) {
+          double b[3];
+          if (!barycentric(pl, i, j, inv_w2_, inv_h2_, b)) continue;
+          const double d = -(b[0] * pl.z[0] + b[1] * pl.z[1] + b[2] * pl.z[2]);
+          if (d < rows.depth[row + i]) {
+            rows.depth[row + i] = d;
+            rows.winner[row + i] = t.tri;
           }
         }
       });
     }
-  };
-
-  raster_pass([&](int32_t tri, const TriPlane&, size_t px, double d) {
-    if (d < depth[px]) {
-      depth[px] = d;
-      winner[px] = tri;
-    }
-  });
-
-  // The back-face layer: the nearest back-facing triangle strictly behind
-  // each pixel's front surface (a closed object's far side), which is what
-  // tells a march how thick the object in front really is.
-  std::vector<double> back_depth;
-  std::vector<int32_t> back_winner;
-  if (in.back_layer) {
-    back_depth.assign(pixels, std::numeric_limits<double>::infinity());
-    back_winner.assign(pixels, -1);
-    raster_pass([&](int32_t tri, const TriPlane& pl, size_t px, double d) {
-      if (pl.back && winner[px] >= 0 && d > depth[px] + kBackSeparation * std::fabs(depth[px]) &&
-          d < back_depth[px]) {
-        back_depth[px] = d;
-        back_winner[px] = tri;
-      }
-    });
   }
+}
 
-  GBufferImages out;
-  out.position = Image(width, height);
-  out.normal = Image(width, height);
-  out.specular = Image(width, height);
-  parallel_rows(0, height, threads, [&](int j) {
-    TriPlane pl;
-    int32_t plane_of = -1;  // neighbours usually share a triangle: reuse its plane
-    for (int i = 0; i < width; ++i) {
-      const int32_t id = winner[static_cast<size_t>(j) * width + i];
+// The back-face layer: the nearest back-facing triangle strictly behind each
+// pixel's front surface (a closed object's far side), which is what tells a
+// march how thick the object in front really is. Front faces and pixels with
+// no front surface are rejected before any barycentric is computed.
+void Rasterizer::back_band(const Chunk& c, int band, const DepthRows& rows) const {
+  const int r0 = row0(band), r1 = row1(band);
+  for (const Chunk::Slice& sl : c.slices) {
+    for (uint32_t q : sl.bins[band]) {
+      const ScreenTri& t = sl.tris[q];
+      const TriPlane& pl = c.planes[t.tri - c.begin];
+      if (!pl.back) continue;
+      for_each_span(t, std::max(t.j_lo, r0), std::min(t.j_hi, r1), [&](int j, int i0, int i1) {
+        const size_t row = static_cast<size_t>(j - r0) * width_;
+        for (int i = i0; i <= i1; ++i) {
+          const size_t px = row + i;
+          if (rows.winner[px] < 0) continue;
+          double b[3];
+          if (!barycentric(pl, i, j, inv_w2_, inv_h2_, b)) continue;
+          const double d = -(b[0] * pl.z[0] + b[1] * pl.z[1] + b[2] * pl.z[2]);
+          const double front = rows.depth[px];
+          if (d > front + kBackSeparation * std::fabs(front) && d < rows.back_depth[px]) {
+            rows.back_depth[px] = d;
+            rows.back_winner[px] = t.tri;
+          }
+        }
+      });
+    }
+  }
+}
+
+void Rasterizer::clear_rows(const DepthRows& rows, size_t n) const {
+  std::fill(rows.depth, rows.depth + n, std::numeric_limits<double>::infinity());
+  std::fill(rows.winner, rows.winner + n, -1);
+  if (rows.back_depth) {
+    std::fill(rows.back_depth, rows.back_depth + n, std::numeric_limits<double>::infinity());
+    std::fill(rows.back_winner, rows.back_winner + n, -1);
+  }
+}
+
+void Rasterizer::shade_band(int band, const DepthRows& rows, const std::vector<TriPlane>* planes) {
+  const Mesh& mesh = in_.mesh;
+  const Mat4& proj = in_.projection;
+  const int r0 = row0(band), r1 = row1(band);
+  // Neighbours usually share a triangle: reuse its plane.
+  auto plane_for = [&](int32_t id, TriPlane& cache, int32_t& cached) -> const TriPlane* {
+    if (planes) return &(*planes)[static_cast<size_t>(id)];
+    if (id != cached) {
+      if (!make_plane(mesh.positions.data() + static_cast<size_t>(id) * 9, proj, cache))
+        return nullptr;  // cannot fail for a winner
+      cached = id;
+    }
+    return &cache;
+  };
+  for (int j = r0; j <= r1; ++j) {
+    const int32_t* win = rows.winner + static_cast<size_t>(j - r0) * width_;
+    TriPlane cache;
+    int32_t cached = -1;
+    for (int i = 0; i < width_; ++i) {
+      const int32_t id = win[i];
       if (id < 0) continue;
       const size_t tri = static_cast<size_t>(id);
       const float* corners = mesh.positions.data() + tri * 9;
-      if (id != plane_of) {
-        if (!make_plane(corners, proj, pl)) continue;  // cannot fail for a winner
-        plane_of = id;
-      }
+      const TriPlane* pl = plane_for(id, cache, cached);
       double b[3];
-      if (!barycentric(pl, i, j, inv_w2, inv_h2, b)) continue;
+      if (!pl || !barycentric(*pl, i, j, inv_w2_, inv_h2_, b)) continue;
       const Vec3 p = interp3(corners, 3, b);
       Vec3 n = interp3(mesh.normals.data() + tri * 9, 3, b);
       if (!normalize(n)) {
@@ -496,46 +583,111 @@ GBufferImages rasterize(const RasterInputs& in, int threads) {
         n = cross(p1 - p0, p2 - p0);
         if (!normalize(n)) continue;
       }
-      const Material& mat = in.materials[mesh.material[tri]];
-      if (mat.normal_map >= 0) n = apply_normal_map(in, in.normal_maps[mat.normal_map], tri, b, n);
-      if (pl.back) n = n * -1.0;
-      float* po = out.position.px(i, j);
+      const Material& mat = in_.materials[mesh.material[tri]];
+      if (mat.normal_map >= 0) n = apply_normal_map(in_, in_.normal_maps[mat.normal_map], tri, b, n);
+      if (pl->back) n = n * -1.0;
+      float* po = out_.position.px(i, j);
       po[0] = static_cast<float>(p.x);
       po[1] = static_cast<float>(p.y);
       po[2] = static_cast<float>(p.z);
       po[3] = 1.0f;
-      float* no = out.normal.px(i, j);
+      float* no = out_.normal.px(i, j);
       no[0] = static_cast<float>(n.x);
       no[1] = static_cast<float>(n.y);
       no[2] = static_cast<float>(n.z);
       no[3] = 1.0f;
-      float* so = out.specular.px(i, j);
+      float* so = out_.specular.px(i, j);
       so[0] = mat.specular[0];
       so[1] = mat.specular[1];
       so[2] = mat.specular[2];
       so[3] = shininess_to_alpha(mat.shininess);
     }
-  });
-  if (in.back_layer) {
-    out.back_position = Image(width, height);
-    parallel_rows(0, height, threads, [&](int j) {
-      TriPlane pl;
-      for (int i = 0; i < width; ++i) {
-        const int32_t id = back_winner[static_cast<size_t>(j) * width + i];
-        if (id < 0) continue;
-        const float* corners = mesh.positions.data() + static_cast<size_t>(id) * 9;
-        double b[3];
-        if (!make_plane(corners, proj, pl) || !barycentric(pl, i, j, inv_w2, inv_h2, b)) continue;
-        const Vec3 p = interp3(corners, 3, b);
-        float* po = out.back_position.px(i, j);
-        po[0] = static_cast<float>(p.x);
-        po[1] = static_cast<float>(p.y);
-        po[2] = static_cast<float>(p.z);
-        po[3] = 1.0f;
+    if (!rows.back_winner) continue;
+    const int32_t* back = rows.back_winner + static_cast<size_t>(j - r0) * width_;
+    cached = -1;
+    for (int i = 0; i < width_; ++i) {
+      const int32_t id = back[i];
+      if (id < 0) continue;
+      const float* corners = mesh.positions.data() + static_cast<size_t>(id) * 9;
+      const TriPlane* pl = plane_for(id, cache, cached);
+      double b[3];
+      if (!pl || !barycentric(*pl, i, j, inv_w2_, inv_h2_, b)) continue;
+      const Vec3 p = interp3(corners, 3, b);
+      float* po = out_.back_position.px(i, j);
+      po[0] = static_cast<float>(p.x);
+      po[1] = static_cast<float>(p.y);
+      po[2] = static_cast<float>(p.z);
+      po[3] = 1.0f;
+    }
+  }
+}
+
+GBufferImages Rasterizer::run() {
+  const bool back = in_.back_layer;
+  const size_t count = in_.mesh.triangle_count();
+  // The outputs are most of the memory a call touches: zero them on all
+  // threads at once.
+  Image* images[4] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position};
+  parallel_rows(0, back ? 4 : 3, threads_, [&](int k) { *images[k] = blank_image(width_, height_); });
+
+  if (count <= kChunk) {
+    // The usual case: every triangle set up at once, so each band can be
+    // finished (front test, back test, shading) while its rows are in cache,
+    // with depth buffers of one band per thread instead of the whole frame.
+    Chunk c;
+    setup_chunk(0, c);
+    const size_t band_px = static_cast<size_t>(band_rows_) * width_;
+    std::atomic<int> next{0};
+    parallel_rows(0, resolve_threads(threads_), threads_, [&](int) {
+      std::vector<double> depth(band_px), back_depth(back ? band_px : 0);
+      std::vector<int32_t> winner(band_px), back_winner(back ? band_px : 0);
+      const DepthRows rows{depth.data(), winner.data(), back ? back_depth.data() : nullptr,
+                           back ? back_winner.data() : nullptr};
+      for (int band = next.fetch_add(1); band < bands_; band = next.fetch_add(1)) {
+        clear_rows(rows, static_cast<size_t>(row1(band) - row0(band) + 1) * width_);
+        front_band(c, band, rows);
+        if (back) back_band(c, band, rows);
+        shade_band(band, rows, &c.planes);
       }
     });
+    return std::move(out_);
   }
-  return out;
+
+  // Many triangles: chunks keep the set-up's memory bounded, so the depth
+  // buffers span the frame and the back test needs a second round of chunks
+  // (it compares against the final front depth).
+  const size_t pixels = static_cast<size_t>(width_) * height_;
+  std::vector<double> depth(pixels), back_depth(back ? pixels : 0);
+  std::vector<int32_t> winner(pixels), back_winner(back ? pixels : 0);
+  auto rows_of = [&](int band) {
+    const size_t at = static_cast<size_t>(row0(band)) * width_;
+    return DepthRows{depth.data() + at, winner.data() + at, back ? back_depth.data() + at : nullptr,
+                     back ? back_winner.data() + at : nullptr};
+  };
+  parallel_rows(0, bands_, threads_, [&](int band) {
+    clear_rows(rows_of(band), static_cast<size_t>(row1(band) - row0(band) + 1) * width_);
+  });
+  Chunk c;
+  for (size_t begin = 0; begin < count; begin += kChunk) {
+    setup_chunk(begin, c);
+    parallel_rows(0, bands_, threads_, [&](int band) { front_band(c, band, rows_of(band)); });
+  }
+  if (back) {
+    for (size_t begin = 0; begin < count; begin += kChunk) {
+      setup_chunk(begin, c);
+      parallel_rows(0, bands_, threads_, [&](int band) { back_band(c, band, rows_of(band)); });
+    }
+  }
+  parallel_rows(0, bands_, threads_, [&](int band) { shade_band(band, rows_of(band), nullptr); });
+  return std::move(out_);
+}
+
+}  // namespace
+
+GBufferImages rasterize(const RasterInputs& in, int threads) {
+  validate(in);
+  require_raster_memory(in, false);
+  return Rasterizer(in, threads).run();
 }
 
 std::vector<int> coverage_count(const std::vector<float>& positions, const Mat4& projection,
