@@ -1,11 +1,14 @@
-"""A frame loses nothing: over the memory limit it is traced at reduced resolution,
-and only when the floor fails too it renders without reflections, saying why."""
+"""A frame loses nothing: over the memory limit it is traced at reduced resolution;
+a lost GL context, a core error or a cancel in the middle of the frame leave it
+rendered without reflections, and the log says why. Faults are injected from
+outside the add-on and the core (glint_faults.py, fault_egl.c)."""
 import os
+import subprocess
 
 import numpy as np
 import pytest
 
-from glint_blender_helpers import load_dump, read_exr
+from glint_blender_helpers import HERE, core, load_dump, read_exr
 
 pytestmark = pytest.mark.blender
 
@@ -72,3 +75,58 @@ def test_when_not_even_the_floor_fits_the_frame_renders_without_reflections(blen
     assert "trying 1/4: 40x23" in log and "trying 1/8: 20x12" in log, log[-3000:]
     assert "rendered WITHOUT reflections: over Glint's memory limit (also at 20x12" in log, log[-3000:]
     assert os.path.isfile(os.path.join(out, "frame_0001.exr"))
+
+
+@pytest.fixture(scope="module")
+def egl_shim(tmp_path_factory):
+    """fault_egl.c built into a stand-in EGL library (the system's libEGL behind it)."""
+    try:
+        core().backend_name("gl")
+    except core().BackendUnavailable as exc:
+        pytest.skip(f"no OpenGL here: {exc}")
+    path = str(tmp_path_factory.mktemp("egl") / "fault_egl.so")
+    proc = subprocess.run(["cc", "-shared", "-fPIC", "-O1", "-o", path, os.path.join(HERE, "fault_egl.c"),
+                           "-l:libEGL.so.1"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if proc.returncode != 0:
+        pytest.skip(f"cannot build the EGL shim: {proc.stdout[-1000:]}")
+    return path
+
+
+def _assert_rendered_without_reflections(log, out, mirror_off, why):
+    assert f"Glint: frame 1: rendered WITHOUT reflections: {why}" in log, log[-3000:]
+    assert "reflections composited" not in log
+    img, base = _frame(out), _frame(mirror_off[0])
+    assert img.shape == base.shape
+    assert np.abs(img - base).max() <= 1e-6  # the frame without reflections, untouched
+
+
+def test_a_gl_context_lost_mid_frame(blender, samples, mirror_off, egl_shim, tmp_path):
+    out = str(tmp_path / "gl_lost")
+    code = f"import glint_faults; glint_faults.lose_gl_context_after_rasterize({egl_shim!r})"
+    log = _render_with_env(blender, samples["mirror_floor"], out,
+                           {"python": code, "dump": True, "glint": {"backend": "GL"}},
+                           GLINT_EGL_LIBRARY=egl_shim)
+    # The G-buffer came from GL; the trace's read-back found the context gone.
+    _assert_rendered_without_reflections(log, out, mirror_off, "RuntimeError: glint GL: GL_CONTEXT_LOST in ")
+    assert str(load_dump(out)["backend"]) == "gl"
+
+
+def test_a_core_error_mid_frame(blender, samples, mirror_off, tmp_path):
+    out = str(tmp_path / "core_error")
+    code = "import glint_faults; glint_faults.core_error_in_trace()"
+    log = blender.render(samples["mirror_floor"], out, {"python": code, "glint": {"backend": "CPU"}})
+    _assert_rendered_without_reflections(log, out, mirror_off,
+                                         "RuntimeError: glint: injected core failure in trace")
+
+
+@pytest.mark.parametrize("when, code, why", [
+    # The export looks once per exported object (4 here): the second look is after the first.
+    ("export", "glint_faults.cancel_after_checks(2)", "Glint export cancelled at 2/4"),
+    # All 4 objects exported, the G-buffer drawn and traced: the look after the trace stops it.
+    ("trace", "glint_faults.cancel_during_trace()", "Glint export cancelled at 4/4"),
+])
+def test_a_cancel_mid_frame(blender, samples, mirror_off, tmp_path, when, code, why):
+    out = str(tmp_path / f"cancel_{when}")
+    log = blender.render(samples["mirror_floor"], out, {"python": "import glint_faults; " + code,
+                                                        "glint": {"backend": "CPU"}})
+    _assert_rendered_without_reflections(log, out, mirror_off, why)
