@@ -149,16 +149,16 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
                 factor = reduced.next_factor(factor, needed, limit)
                 if factor is None:
                     raise
-                log(f"frame {report.frame}: over the memory limit at 1/{tried} of the size; "
-                    "trying 1/{0}: {1}x{2}".format(factor, *reduced.reduced_size(cam.width, cam.height, factor)))
+                log(f"frame {report.frame}: {reduced.retrying(cam.width, cam.height, tried, factor)}")
         if traced is None:
             report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
             report.timings_ms = timings.ms
             return report
         position, normal, specular, uv = traced
         if factor > 1:
-            position, normal, specular, uv = (reduced.upsample_nearest(a, cam.width, cam.height)
-                                              for a in (position, normal, specular, uv))
+            with timings.measure("upsample"):
+                position, normal, specular, uv = (reduced.upsample_nearest(a, cam.width, cam.height)
+                                                  for a in (position, normal, specular, uv))
             report.reflective_pixels = int(np.count_nonzero(compositing.reflective_mask(position, specular)))
             note = reduced.describe(cam.width, cam.height, factor, *first_refusal)
             report.message = "; ".join(m for m in (report.message, note) if m)

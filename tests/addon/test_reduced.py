@@ -95,3 +95,8 @@ def test_the_report_says_the_size_and_why():
     assert "3.0 MiB" in text and "1.5 MiB" in text and "GLINT_MEMORY_LIMIT_MB" in text
     assert "40x23" in r.gave_up(160, 90, 4) and "1/4" in r.gave_up(160, 90, 4)
     assert "20x12" in r.gave_up(160, 90, 1)  # predicted: the floor, 1/8
+
+
+def test_each_retry_is_logged_with_both_sizes():
+    assert r.retrying(160, 90, 1, 2) == "over the memory limit at full size; trying 1/2: 80x45"
+    assert r.retrying(160, 90, 4, 8) == "over the memory limit at 40x23 (1/4); trying 1/8: 20x12"

@@ -94,6 +94,13 @@ def describe(width: int, height: int, factor: int, needed_bytes: float, limit_by
             f"{why}; raise the limit (GLINT_MEMORY_LIMIT_MB) for full resolution")
 
 
+def retrying(width: int, height: int, refused: int, factor: int) -> str:
+    """The log line of one retry: the size refused and the one tried next."""
+    where = "full size" if refused == 1 else "{}x{} (1/{})".format(*reduced_size(width, height, refused), refused)
+    w, h = reduced_size(width, height, factor)
+    return f"over the memory limit at {where}; trying 1/{factor}: {w}x{h}"
+
+
 def gave_up(width: int, height: int, factor: int, max_factor: int = MAX_FACTOR) -> str:
     """Why a frame refused at ``factor`` gets no reflections: the last size tried
     failed, or by the sizes even the floor would not fit."""
