@@ -157,9 +157,19 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         position, normal, specular, uv = traced
         if factor > 1:
             with timings.measure("upsample"):
-                position, normal, specular, uv = (reduced.upsample_nearest(a, cam.width, cam.height)
-                                                  for a in (position, normal, specular, uv))
-            report.reflective_pixels = int(np.count_nonzero(compositing.reflective_mask(position, specular)))
+                # The compositor reads the uv and the mask at the frame's size; position
+                # and normal only for a G-buffer debug view or the layers EXR (else they
+                # stay reduced: two frame-size images fewer when memory is short).
+                refl = compositing.reflective_mask(position, specular)
+                stretched = [uv, specular]
+                if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
+                    stretched += [position, normal]
+                stretched = [reduced.upsample_nearest(a, cam.width, cam.height) for a in stretched]
+                uv, specular = stretched[:2]
+                if len(stretched) == 4:
+                    position, normal = stretched[2:]
+                report.reflective_pixels = int(np.count_nonzero(reduced.upsample_nearest(refl, cam.width,
+                                                                                        cam.height)))
             note = reduced.describe(cam.width, cam.height, factor, *first_refusal)
             report.message = "; ".join(m for m in (report.message, note) if m)
             log(f"frame {report.frame}: {note}")

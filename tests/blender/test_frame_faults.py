@@ -66,6 +66,27 @@ def test_over_the_memory_limit_the_frame_is_traced_at_half_size(blender, samples
     assert err_reduced < 0.5 * err_none, (err_reduced, err_none)
 
 
+def test_at_reduced_resolution_debug_views_and_layers_are_frame_sized(blender, samples, tmp_path):
+    out = str(tmp_path / "half_layers")
+    log = _render_with_env(blender, samples["mirror_floor"], out,
+                           {"dump": True, "glint": {"backend": "CPU", "debug_view": "NORMAL",
+                                                    "write_layers_exr": True}},
+                           GLINT_MEMORY_LIMIT_MB="1")
+    assert "reflections traced at reduced resolution 80x45" in log, log[-3000:]
+    dump = load_dump(out)
+    layers = read_exr(os.path.join(out, "frame_glint_0001.exr"), layer=None)
+    for name in ("Position", "Normal", "Specular", "UV"):
+        assert layers[name].shape == (90, 160, 4), name
+    # The normal debug view is the stretched G-buffer: 2x2 blocks, n * 0.5 + 0.5 where seen.
+    img = _frame(out)
+    n = dump["normal"]
+    assert n.shape == (90, 160, 4)
+    seen = dump["position"][..., 3] > 0.5
+    assert np.allclose(img[seen, :3], n[seen, :3] * 0.5 + 0.5, atol=1e-6)
+    blocks = n.reshape(45, 2, 80, 2, 4)
+    assert np.array_equal(blocks, np.broadcast_to(blocks[:, :1, :, :1], blocks.shape))
+
+
 def test_when_not_even_the_floor_fits_the_frame_renders_without_reflections(blender, samples, tmp_path):
     out = str(tmp_path / "floor")
     # 0.2 MiB: the 1038 triangles' set-up alone is more, at any size.
