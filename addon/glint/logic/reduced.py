@@ -5,12 +5,12 @@ over its memory limit before allocating anything (``MemoryLimitExceeded``, with
 ``needed_bytes`` and ``limit_bytes``). Nearly all of that memory is per pixel:
 the G-buffer, the trace's scratch and its output. So a refused frame is
 rasterized and traced again at 1/2, 1/4 or 1/8 of its width and height (the
-floor: 1/64 of its pixels, reflections still recognisable after the group's
-blur), and the result is stretched back to the frame's size. The projection
+floor: 1/64 of its pixels), and the result is stretched back to the frame's size. The projection
 does not depend on the pixel count, and the trace's reflected (u, v) are
 normalized to the frame, so they stay valid at any size.
 
-Stretching is by nearest neighbour, on every layer. Bilinear weights would
+Stretching is by nearest neighbour, for every layer stretched (the uv, the
+mask, and the G-buffer when a debug view or the layers EXR shows it). Bilinear weights would
 invent uvs the trace never found: between a hit and a miss (whose uv is 0, 0)
 they point toward the frame's corner, and between a reflected sphere and the
 wall behind it they point at neither. Nearest keeps every uv one the trace
