@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import compositor, gather, native
-from .logic import compositing, geometry, settings as settings_logic
+from .logic import compositing, geometry, reduced, settings as settings_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
 
@@ -24,9 +24,11 @@ def settings_dict(glint) -> dict:
     }
 
 
-def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = False):
+def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = False, size=None):
     """The G-buffer of an export (with its normal maps, if any) on ``backend``; with
-    ``back_layer``, also the surface behind each pixel (the march's true thickness)."""
+    ``back_layer``, also the surface behind each pixel (the march's true thickness).
+    ``size`` (w, h): fewer pixels over the same view (the projection does not
+    depend on the pixel count); default the camera's."""
     t = exp.triangles
     kwargs = {"back_layer": True} if back_layer else {}
     if t.uvs is not None and exp.normal_maps:
@@ -34,7 +36,8 @@ def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = Fa
                       normal_maps=exp.normal_maps)
     cam = exp.camera
     return core.rasterize(t.positions, t.normals, t.material_index, exp.materials,
-                          cam.projection.astype(np.float32), cam.width, cam.height, backend=backend, **kwargs)
+                          cam.projection.astype(np.float32), *(size or (cam.width, cam.height)),
+                          backend=backend, **kwargs)
 
 
 def mesh_kwargs(core, exp: gather.SceneExport, march: str) -> dict:
@@ -82,6 +85,8 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.status, report.message = "skipped", compositing.TRUE_REFLECTION_NOTE
         return report
     progress = Progress(0, report=progress_report, should_stop=should_stop, label="Glint export")
+    memory_refused = getattr(core, "MemoryLimitExceeded", ())
+    tried = 1  # the last resolution factor the core refused for memory
     try:
         with timings.measure("export"):
             exp = gather.export_scene(depsgraph, progress, max_distance=values["max_distance"])
@@ -103,41 +108,89 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             backend = resolve_backend(core, choice)
             kwargs = settings_logic.trace_kwargs(values, core.presets())
             back_layer = core.march_details()[kwargs["march"]]["uses_back_position"]
-            gbuf, used = _with_backend(core, backend, requested,
-                                       lambda b: rasterize(core, exp, b, back_layer))
-        progress.check()
-        position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-        with timings.measure("images"):  # which pixels reflect: counted, and the trace's input
-            refl = compositing.reflective_mask(position, specular)
-            report.reflective_pixels = int(np.count_nonzero(refl))
-        report.backend = used
-        if report.reflective_pixels == 0:
+
+        def attempt(size):
+            """G-buffer and trace at ``size`` (None: the frame's); None when no pixel reflects."""
+            kw = dict(kwargs)
+            with timings.measure("rasterize"):
+                gbuf, used = _with_backend(core, backend, requested,
+                                           lambda b: rasterize(core, exp, b, back_layer, size))
+            progress.check()
+            position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
+            with timings.measure("images"):  # which pixels reflect: counted, and the trace's input
+                refl = compositing.reflective_mask(position, specular)
+                report.reflective_pixels = int(np.count_nonzero(refl))
+            report.backend = used
+            if report.reflective_pixels == 0:
+                return None
+            if back_layer:
+                kw["back_position"] = gbuf["back_position"]
+            kw.update(mesh_kwargs(core, exp, kw["march"]))
+            if used == "gl" and not core.march_details()[kw["march"]]["gl"]:
+                log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
+            proj32 = cam.projection.astype(np.float32)
+            with timings.measure("trace"):
+                # The specular buffer skips the pixels that do not reflect; the normals
+                # of what they show stay, for the rays that hit them.
+                uv, used = _with_backend(core, used, requested,
+                                         lambda b: core.trace(position, normal, proj32, specular=specular,
+                                                              backend=b, **kw))
+            report.backend = used
+            return position, normal, specular, uv
+
+        # A refusal for memory (rasterize, trace, the exact march's mesh) retries
+        # with fewer pixels down to a floor before the frame goes without: logic/reduced.py.
+        factor = 1
+        while True:
+            try:
+                traced = attempt(None if factor == 1 else reduced.reduced_size(cam.width, cam.height, factor))
+                break
+            except memory_refused as exc:
+                tried = factor
+                needed, limit = getattr(exc, "needed_bytes", 0), getattr(exc, "limit_bytes", 0)
+                if factor == 1:
+                    first_refusal = (needed, limit)
+                factor = reduced.next_factor(factor, needed, limit)
+                if factor is None:
+                    raise
+                log(f"frame {report.frame}: {reduced.retrying(cam.width, cam.height, tried, factor)}")
+        if traced is None:
             report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
             report.timings_ms = timings.ms
             return report
-        if back_layer:
-            kwargs["back_position"] = gbuf["back_position"]
-        kwargs.update(mesh_kwargs(core, exp, kwargs["march"]))
-        if used == "gl" and not core.march_details()[kwargs["march"]]["gl"]:
-            log(f"march '{kwargs['march']}' has no OpenGL form: it traces on the CPU")
+        position, normal, specular, uv = traced
         proj32 = cam.projection.astype(np.float32)
-        with timings.measure("trace"):
-            # The specular buffer skips the pixels that do not reflect; the normals of
-            # what they show stay, for the rays that hit them.
-            uv, used = _with_backend(core, used, requested,
-                                     lambda b: core.trace(position, normal, proj32, specular=specular,
-                                                          backend=b, **kwargs))
-        report.backend = used
-        progress.check()
         with timings.measure("images"):
             # Everything the composite needs that does not depend on the frame's
-            # colour, from the core: each pixel's weight and blur level.
+            # colour, from the core, at the size traced: each pixel's weight and
+            # blur level.
             lod = core.cone_lod(uv, specular)
-            weight = core.specular_weight(position, normal, specular, proj32)
-            images = {compositing.IMAGE_UV: compositing.uv_image(uv),
-                      compositing.IMAGE_WEIGHT: compositing.weight_image(weight, lod)}
+            if factor > 1:  # the footprint in frame pixels is `factor` times larger
+                lod[lod > 0] += np.float32(np.log2(factor))
+            weight = compositing.weight_image(core.specular_weight(position, normal, specular, proj32), lod)
             if not compositing.any_rough(specular, uv, lod):
                 report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
+        if factor > 1:
+            with timings.measure("upsample"):
+                # The compositor reads the uv and the weight at the frame's size; the
+                # G-buffer only for a debug view or the layers EXR (else it stays
+                # reduced: fewer frame-size images when memory is short).
+                refl = compositing.reflective_mask(position, specular)
+                stretched = [uv, weight]
+                if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
+                    stretched += [position, normal, specular]
+                stretched = [reduced.upsample_nearest(a, cam.width, cam.height) for a in stretched]
+                uv, weight = stretched[:2]
+                if len(stretched) == 5:
+                    position, normal, specular = stretched[2:]
+                report.reflective_pixels = int(np.count_nonzero(reduced.upsample_nearest(refl, cam.width,
+                                                                                        cam.height)))
+            note = reduced.describe(cam.width, cam.height, factor, *first_refusal)
+            report.message = "; ".join(m for m in (report.message, note) if m)
+            log(f"frame {report.frame}: {note}")
+        progress.check()
+        with timings.measure("images"):
+            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_WEIGHT: weight}
             view = values["debug_view"]
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
@@ -158,10 +211,12 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.status, report.message = "skipped", str(exc)
     except core.BackendUnavailable as exc:
         report.status, report.message = "error", f"backend unavailable: {exc}"
-    except getattr(core, "MemoryLimitExceeded", ()) as exc:
-        # Refused from its sizes before anything was allocated: the render goes on
-        # without reflections, and the message says how much and how to raise the limit.
-        report.status, report.message = "error", f"over Glint's memory limit: {exc}"
+    except memory_refused as exc:
+        # Refused from its sizes before anything was allocated, at full size and
+        # down to the floor: the render goes on without reflections, and the
+        # message says how much and how to raise the limit.
+        report.status = "error"
+        report.message = f"over Glint's memory limit ({reduced.gave_up(cam.width, cam.height, tried)}): {exc}"
     except (ValueError, RuntimeError, MemoryError) as exc:
         report.status, report.message = "error", f"{type(exc).__name__}: {exc}"
     report.timings_ms = timings.ms

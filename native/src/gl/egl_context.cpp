@@ -110,6 +110,8 @@ const char* gl_error_name(unsigned int code) {
     case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
     case GL_STACK_UNDERFLOW: return "GL_STACK_UNDERFLOW";
     case GL_STACK_OVERFLOW: return "GL_STACK_OVERFLOW";
+    // A driver reset or a lost device: what a read-back reports then.
+    case GL_CONTEXT_LOST: return "GL_CONTEXT_LOST";
     default: return "unknown GL error";
   }
 }
