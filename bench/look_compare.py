@@ -1,0 +1,465 @@
+"""How Glint's reflections compare with Cycles' and with Eevee's own SSR, per scene.
+
+Builds four sample scenes of its own (a glossy floor under coloured objects, the same
+floor at roughness 0.3, a metal sphere in a room, a grazing corridor) and, for each,
+isolates the reflections of the objects three ways:
+
+  cycles  Cycles, every mesh visible to glossy rays minus the same frame with them all
+          invisible to glossy rays (``visible_glossy = False``), which reflects the sky
+          alone as Eevee's world probe does; same seed, so every path that never meets
+          a reflected mesh is the same in both and cancels
+  ssr     Eevee with Screen Space Reflections on minus Eevee with it off
+  glint   Eevee with Glint on (default preset, backend CPU) minus Eevee with it off
+          (SSR off in both)
+
+Every frame is read back as linear float from an EXR (view transform Standard). Over
+the reflecting pixels (on a reflecting surface, away from its edges, where Cycles'
+difference is significant) it prints per method: strength = sum(m*c)/sum(c*c), the
+projection of its reflection on Cycles'; error = L1(m - c)/L1(c); the largest change
+the method makes on the pixels that reflect nothing (off the reflecting surfaces); and
+the median wall time it adds to the Eevee frame. docs/look.md explains the method. Usage, from
+a checkout after building:
+
+  blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
+      [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
+      [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor]
+
+The add-on is registered from this checkout (or --addon); the core comes from
+GLINT_CORE_PATH (default: <checkout>/build/python).
+"""
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import sys
+import tempfile
+import time
+
+import bpy
+import numpy as np
+from mathutils import Vector
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+SCENES = ("floor", "rough", "metal", "corridor")
+METHODS = ("cycles", "ssr", "glint")
+LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)  # Rec. 709, Blender's linear primaries
+# Isolated reflections are signed (an object replaces the sky it hides): shown as
+# 0.5 + GAIN * difference, so mid grey is "no change".
+REFLECTION_GAIN = 2.0
+
+
+def _args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    opts = {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
+            "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
+            "scenes": list(SCENES)}
+    i = 0
+    while i < len(argv):
+        key, value = argv[i].lstrip("-"), argv[i + 1] if i + 1 < len(argv) else None
+        if value is None or key not in opts:
+            raise ValueError(f"{argv[i]}: expected one of --{', --'.join(opts)} with a value")
+        if key == "size":
+            w, h = value.lower().split("x")
+            opts[key] = (int(w), int(h))
+            if min(opts[key]) < 8:
+                raise ValueError(f"--size {value}: at least 8x8")
+        elif key in ("cycles-samples", "eevee-samples", "rounds"):
+            opts[key] = int(value)
+            if opts[key] < (1 if key == "rounds" else 2):
+                raise ValueError(f"--{key} {value}: too small")
+        elif key == "threshold":
+            opts[key] = float(value)
+        elif key in ("out", "addon"):
+            opts[key] = os.path.abspath(value)
+        else:
+            names = [s for s in value.split(",") if s]
+            unknown = [s for s in names if s not in SCENES]
+            if unknown or not names:
+                raise ValueError(f"--scenes {value}: choose among {','.join(SCENES)}")
+            opts[key] = names
+        i += 2
+    return opts
+
+
+def _register_addon(parent):
+    os.environ.setdefault("GLINT_CORE_PATH", os.path.join(ROOT, "build", "python"))
+    sys.path.insert(0, parent)
+    import glint
+    glint.register()
+    return glint
+
+
+# ----------------------------------------------------------------------------
+# Scenes
+
+
+def _material(name, colour, roughness, specular=0.5, metallic=0.0):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    p = mat.node_tree.nodes["Principled BSDF"]
+    p.inputs["Base Color"].default_value = (*colour, 1.0)
+    p.inputs["Roughness"].default_value = roughness
+    p.inputs["Metallic"].default_value = metallic
+    p.inputs["Specular"].default_value = specular
+    return mat
+
+
+def _diffuse(name, colour):
+    """A matte object: Specular 0, so it reflects nothing itself and only what it
+    adds to the reflecting surface's reflection is measured."""
+    return _material(name, colour, 0.5, specular=0.0)
+
+
+def _add(op, material, smooth=True, **kwargs):
+    getattr(bpy.ops.mesh, op)(**kwargs)
+    ob = bpy.context.object
+    ob.data.materials.append(material)
+    if smooth:
+        bpy.ops.object.shade_smooth()
+    return ob
+
+
+def _plane(name, size, location, rotation, material, scale=(1.0, 1.0, 1.0)):
+    bpy.ops.mesh.primitive_plane_add(size=size, location=location, rotation=rotation)
+    ob = bpy.context.object
+    ob.name = name
+    ob.scale = scale
+    ob.data.materials.append(material)
+    return ob
+
+
+def _sun(rotation_deg, energy=3.0):
+    bpy.ops.object.light_add(type="SUN", rotation=tuple(math.radians(a) for a in rotation_deg))
+    bpy.context.object.data.energy = energy
+
+
+def _camera(location, rotation_deg, lens=50.0):
+    bpy.ops.object.camera_add(location=location, rotation=tuple(math.radians(a) for a in rotation_deg))
+    cam = bpy.context.object
+    cam.data.lens = lens
+    bpy.context.scene.camera = cam
+
+
+def _floor_scene(roughness):
+    floor = _plane("Glossy Floor", 16.0, (0, 0, 0), (0, 0, 0), _material("Floor", (0.2, 0.2, 0.22), roughness))
+    _add("primitive_uv_sphere_add", _diffuse("Red", (0.8, 0.05, 0.03)),
+         radius=0.8, location=(0, 0, 0.8), segments=48, ring_count=24)
+    _add("primitive_cube_add", _diffuse("Green", (0.05, 0.6, 0.08)), smooth=False,
+         size=1.1, location=(-2.3, 1.0, 0.55))
+    _add("primitive_cylinder_add", _diffuse("Blue", (0.05, 0.1, 0.8)),
+         radius=0.5, depth=1.6, location=(2.3, 1.0, 0.8), vertices=48)
+    _add("primitive_torus_add", _diffuse("Yellow", (0.9, 0.7, 0.05)),
+         location=(0.8, 2.6, 0.25), major_radius=0.8, minor_radius=0.25)
+    _sun((50, 10, 30))
+    _camera((0.0, -7.5, 2.2), (78, 0, 0))
+    return [floor]
+
+
+def _metal_scene():
+    """A metal sphere on a matte floor in a room open towards the camera and the sky."""
+    _plane("Floor", 10.0, (0, 0, 0), (0, 0, 0), _diffuse("Floor", (0.5, 0.45, 0.4)))
+    _plane("Back Wall", 10.0, (0, 5, 2), (math.radians(90), 0, 0), _diffuse("Back", (0.1, 0.3, 0.7)),
+           scale=(1.0, 0.4, 1.0))
+    _plane("Left Wall", 10.0, (-5, 0, 2), (math.radians(90), 0, math.radians(90)),
+           _diffuse("Left", (0.7, 0.15, 0.1)), scale=(1.0, 0.4, 1.0))
+    _plane("Right Wall", 10.0, (5, 0, 2), (math.radians(90), 0, math.radians(90)),
+           _diffuse("Right", (0.15, 0.6, 0.15)), scale=(1.0, 0.4, 1.0))
+    _add("primitive_cube_add", _diffuse("Box", (0.9, 0.7, 0.05)), smooth=False,
+         size=1.0, location=(-1.8, 1.2, 0.5))
+    sphere = _add("primitive_uv_sphere_add", _material("Metal", (0.9, 0.9, 0.9), 0.1, metallic=1.0),
+                  radius=1.0, location=(0.4, 0.0, 1.0), segments=64, ring_count=32)
+    _sun((40, 0, 20))
+    _camera((0.0, -8.0, 2.6), (80, 0, 0))
+    return [sphere]
+
+
+def _corridor_scene():
+    """Looking down a long corridor whose floor and walls are glossy; coloured
+    pillars stand along the walls, the ceiling is open to the sky."""
+    glossy = _material("Corridor", (0.25, 0.25, 0.27), 0.1)
+    length, half_width, height = 40.0, 1.5, 3.0
+    floor = _plane("Floor", 1.0, (0, length / 2 - 2, 0), (0, 0, 0), glossy, scale=(2 * half_width, length, 1))
+    left = _plane("Left Wall", 1.0, (-half_width, length / 2 - 2, height / 2), (0, math.radians(90), 0), glossy,
+                  scale=(height, length, 1))
+    right = _plane("Right Wall", 1.0, (half_width, length / 2 - 2, height / 2), (0, math.radians(90), 0), glossy,
+                   scale=(height, length, 1))
+    colours = [(0.8, 0.05, 0.03), (0.05, 0.6, 0.08), (0.05, 0.1, 0.8), (0.9, 0.7, 0.05)]
+    for k in range(6):
+        side = -1 if k % 2 == 0 else 1
+        _add("primitive_cube_add", _diffuse(f"Pillar {k}", colours[k % 4]), smooth=False,
+             size=1.0, location=(side * (half_width - 0.3), 3.0 + 5.0 * k, 0.9), scale=(0.3, 0.3, 0.9))
+    _plane("End Wall", 1.0, (0, length - 2, height / 2), (math.radians(90), 0, 0),
+           _diffuse("End", (0.9, 0.85, 0.8)), scale=(2 * half_width, height, 1))
+    _sun((30, 0, 15))
+    _camera((0.0, -1.5, 0.8), (88, 0, 0), lens=28.0)
+    return [floor, left, right]
+
+
+BUILDERS = {
+    "floor": lambda: _floor_scene(0.1),
+    "rough": lambda: _floor_scene(0.3),
+    "metal": _metal_scene,
+    "corridor": _corridor_scene,
+}
+
+
+def build_scene(name, opts):
+    scene = bpy.context.scene
+    if scene.glint.enabled:
+        scene.glint.enabled = False
+    for ob in list(scene.objects):
+        bpy.data.objects.remove(ob)
+    for mat in list(bpy.data.materials):
+        bpy.data.materials.remove(mat)
+    r = scene.render
+    r.resolution_x, r.resolution_y = opts["size"]
+    r.resolution_percentage = 100
+    r.film_transparent = False
+    r.image_settings.file_format = "OPEN_EXR"
+    r.image_settings.color_depth = "32"
+    r.image_settings.exr_codec = "ZIP"
+    vs = scene.view_settings
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = "Standard", "None", 0.0, 1.0
+    scene.display_settings.display_device = "sRGB"
+    scene.eevee.taa_render_samples = opts["eevee-samples"]
+    scene.eevee.use_ssr_halfres = False
+    c = scene.cycles
+    c.device = "CPU"
+    c.samples = max(1, opts["cycles-samples"] // 2)  # two seeds, averaged
+    c.use_adaptive_sampling = False  # would sample the two frames of a pair differently
+    c.use_denoising = False
+    c.use_animated_seed = False
+    c.blur_glossy = 0.0
+    world = scene.world or bpy.data.worlds.new("World")
+    scene.world = world
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.3, 0.35, 0.45, 1.0)
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
+    reflectors = BUILDERS[name]()
+    meshes = [ob for ob in scene.objects if ob.type == "MESH"]
+    return scene, reflectors, meshes
+
+
+# ----------------------------------------------------------------------------
+# Rendering and reading back
+
+
+def render(scene, path):
+    """Render the frame (compositor included) and read it back: linear float [h, w, 3],
+    row 0 at the bottom; returns (pixels, wall ms)."""
+    t0 = time.perf_counter()
+    bpy.ops.render.render(write_still=False)
+    ms = (time.perf_counter() - t0) * 1e3
+    bpy.data.images["Render Result"].save_render(path, scene=scene)
+    img = bpy.data.images.load(path, check_existing=False)
+    try:
+        w, h = img.size
+        px = np.empty(w * h * 4, dtype=np.float32)
+        img.pixels.foreach_get(px)
+    finally:
+        bpy.data.images.remove(img)
+    os.remove(path)
+    return px.reshape(h, w, 4)[:, :, :3].astype(np.float64), ms
+
+
+def cycles_pair(scene, meshes, seed, tmp):
+    """Every mesh, the reflecting surfaces too, is hidden from glossy rays in the
+    frame without: the corridor's walls reflect each other and the floor, and SSR
+    and Glint find those reflections too (their frame without reflects the world
+    alone)."""
+    scene.render.engine = "CYCLES"
+    scene.cycles.seed = seed
+    frames = {}
+    for visible in (True, False):
+        for ob in meshes:
+            ob.visible_glossy = visible
+        frames[visible], _ = render(scene, os.path.join(tmp, "frame.exr"))
+    for ob in meshes:
+        ob.visible_glossy = True
+    return frames[True], frames[False]
+
+
+def eevee(scene, mode, tmp, state, stages):
+    """Renders with Eevee plain, with its SSR or with Glint; Glint's stage timings
+    go into ``stages``."""
+    scene.render.engine = "BLENDER_EEVEE"
+    scene.eevee.use_ssr = mode == "ssr"
+    g = scene.glint
+    if mode == "glint":
+        g.backend = "CPU"
+        if not g.enabled:
+            g.enabled = True
+    elif g.enabled:
+        g.enabled = False
+    before = state.last
+    px, ms = render(scene, os.path.join(tmp, "frame.exr"))
+    if mode == "glint":
+        # A new report, and an "ok" one: otherwise the frame is Eevee's alone and
+        # every figure of Glint's would be of nothing.
+        last = state.last
+        if last is None or last is before or last.status != "ok":
+            raise RuntimeError(f"Glint did not run on the frame: {last}")
+        stages.update(getattr(last, "timings_ms", None) or {})
+    return px, ms
+
+
+def surface_masks(scene, reflectors):
+    """Per pixel (row 0 at the bottom): the camera ray through its centre hits a
+    reflecting surface (``on``), or something else or nothing (``off``). Both are
+    shrunk by a pixel so that antialiased edges, which mix the two, are in neither."""
+    w, h = scene.render.resolution_x, scene.render.resolution_y
+    cam = scene.camera
+    dg = bpy.context.evaluated_depsgraph_get()
+    frame = cam.data.view_frame(scene=scene)  # top right, bottom right, bottom left, top left
+    tr, br, bl = (Vector(v) for v in frame[:3])
+    mw = cam.matrix_world
+    origin = mw.translation.copy()
+    rot = mw.to_3x3()
+    names = {ob.name for ob in reflectors}
+    hit_reflector = np.zeros((h, w), dtype=bool)
+    for y in range(h):
+        fy = (y + 0.5) / h
+        for x in range(w):
+            fx = (x + 0.5) / w
+            d = rot @ (bl + (br - bl) * fx + (tr - br) * fy)
+            hit, _, _, _, ob, _ = scene.ray_cast(dg, origin, d.normalized())
+            hit_reflector[y, x] = hit and ob is not None and ob.original.name in names
+
+    def erode(m):
+        out = m.copy()
+        out[1:, :] &= m[:-1, :]
+        out[:-1, :] &= m[1:, :]
+        out[:, 1:] &= m[:, :-1]
+        out[:, :-1] &= m[:, 1:]
+        return out
+    return erode(hit_reflector), erode(~hit_reflector)
+
+
+# ----------------------------------------------------------------------------
+# Figures
+
+
+def _box3(a):
+    padded = np.pad(a, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    h, w = a.shape[:2]
+    return sum(padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)) / 9.0
+
+
+def figures(diff, c, reflecting, elsewhere):
+    """strength, error over the reflecting pixels; largest change elsewhere."""
+    m, ref = diff[reflecting], c[reflecting]
+    strength = float((m * ref).sum() / (ref * ref).sum())
+    error = float(np.abs(m - ref).sum() / np.abs(ref).sum())
+    change = float(np.abs(diff[elsewhere]).max()) if elsewhere.any() else 0.0
+    return strength, error, change
+
+
+def _srgb(linear):
+    x = np.clip(linear, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def write_png(path, display):
+    """``display``: [h, w, 3] display values in [0, 1], row 0 at the bottom."""
+    h, w = display.shape[:2]
+    img = bpy.data.images.new(os.path.basename(path), w, h, alpha=False, float_buffer=False)
+    try:
+        rgba = np.ones((h, w, 4), dtype=np.float32)
+        rgba[:, :, :3] = display
+        img.pixels.foreach_set(rgba.ravel())
+        img.filepath_raw = path
+        img.file_format = "PNG"
+        img.save()
+    finally:
+        bpy.data.images.remove(img)
+
+
+def run_scene(name, opts, state, tmp):
+    scene, reflectors, meshes = build_scene(name, opts)
+    t0 = time.perf_counter()
+    with_a, without_a = cycles_pair(scene, meshes, 1, tmp)
+    with_b, without_b = cycles_pair(scene, meshes, 2, tmp)
+    cycles_s = time.perf_counter() - t0
+    c_a, c_b = with_a - without_a, with_b - without_b
+    c = (c_a + c_b) / 2
+    cycles_frame = (with_a + with_b) / 2
+
+    t0 = time.perf_counter()
+    modes = ("plain", "ssr", "glint")
+    frames, added_ms, timings = {}, {m: [] for m in modes[1:]}, {}
+    for k in range(opts["rounds"] + 1):  # round 0 compiles shaders and warms caches: not timed
+        walls = {}
+        for mode in modes[k % 3:] + modes[:k % 3]:
+            frames[mode], walls[mode] = eevee(scene, mode, tmp, state, timings)
+        if k:
+            for mode in added_ms:
+                added_ms[mode].append(walls[mode] - walls["plain"])
+    scene.glint.enabled = False
+    eevee_s = time.perf_counter() - t0
+
+    on, off = surface_masks(scene, reflectors)
+    # Selected on Cycles' reflection averaged over 3x3 pixels, so that its noise does
+    # not pick pixels; the figures then use the pixels as they are.
+    reflecting = on & (np.abs(_box3(c)) @ LUMA > opts["threshold"])
+    if not reflecting.any():
+        raise RuntimeError(f"scene {name}: no pixel reflects more than --threshold {opts['threshold']}")
+    diffs = {"cycles": c, "ssr": frames["ssr"] - frames["plain"], "glint": frames["glint"] - frames["plain"]}
+    added = {"cycles": float("nan"), **{m: statistics.median(v) for m, v in added_ms.items()}}
+    rows = []
+    for method in METHODS:
+        strength, error, change = figures(diffs[method], c, reflecting, off)
+        if method == "cycles":
+            change = float(np.abs(c[off]).max()) if off.any() else 0.0
+        rows.append((name, method, strength, error, change, added[method]))
+    # Cycles' own noise: one seed's reflection against the other's. The error of the
+    # average of both (the reference) is about half of this.
+    noise = figures(c_b, c_a, reflecting, off)[1]
+
+    os.makedirs(opts["out"], exist_ok=True)
+    for method, frame in (("cycles", cycles_frame), ("ssr", frames["ssr"]), ("glint", frames["glint"])):
+        write_png(os.path.join(opts["out"], f"{name}_{method}.png"), _srgb(frame))
+        write_png(os.path.join(opts["out"], f"{name}_{method}_reflection.png"),
+                  np.clip(0.5 + REFLECTION_GAIN * diffs[method], 0.0, 1.0))
+    mask = np.zeros(on.shape + (3,))
+    mask[on] = (0.3, 0.3, 0.3)
+    mask[reflecting] = (1.0, 1.0, 1.0)
+    write_png(os.path.join(opts["out"], f"{name}_pixels.png"), mask)
+    info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
+                noise=noise, cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
+    return rows, info
+
+
+def main():
+    opts = _args()
+    _register_addon(opts["addon"])
+    from glint.state import STATE
+    all_rows, infos = [], {}
+    with tempfile.TemporaryDirectory(prefix="glint_look_") as tmp:
+        for name in opts["scenes"]:
+            t0 = time.perf_counter()
+            rows, info = run_scene(name, opts, STATE, tmp)
+            info["total_s"] = time.perf_counter() - t0
+            all_rows += rows
+            infos[name] = info
+            print(f"look_compare: {name} done in {info['total_s']:.0f} s", flush=True)
+    w, h = opts["size"]
+    print(f"\nlook_compare: {w}x{h}, Cycles {opts['cycles-samples']} samples (2 seeds x "
+          f"{opts['cycles-samples'] // 2}), Eevee {opts['eevee-samples']} samples, threshold "
+          f"{opts['threshold']}, time added: median of {opts['rounds']} rounds, add-on {opts['addon']}\n")
+    print("| scene | method | strength | error | max change elsewhere | time added ms |")
+    print("|---|---|---:|---:|---:|---:|")
+    for name, method, strength, error, change, added in all_rows:
+        ms = "-" if math.isnan(added) else f"{added:.0f}"
+        print(f"| {name} | {method} | {strength:.2f} | {error:.2f} | {change:.4f} | {ms} |")
+    print("\n| scene | reflecting pixels | surface pixels | pixels elsewhere | Cycles seed-to-seed error "
+          "| Cycles s | Eevee s | Glint stages ms |")
+    print("|---|---:|---:|---:|---:|---:|---:|---|")
+    for name, i in infos.items():
+        stages = ", ".join(f"{k} {v:.0f}" for k, v in i["glint_stages"].items())
+        print(f"| {name} | {i['pixels']} | {i['surface']} | {i['elsewhere']} | {i['noise']:.3f} "
+              f"| {i['cycles_s']:.0f} | {i['eevee_s']:.0f} | {stages} |")
+
+
+main()
