@@ -193,6 +193,10 @@ void main() {
   float nt = ray_num(t);
   float bt = ray_b(t);
   int level = 0;
+  // parent_exit[l]: where the ray leaves the cell of level l it is in, once
+  // that cell is known to overlap it, else -inf (march_hiz() says why).
+  float parent_exit[32];
+  for (int l = 0; l <= top; ++l) parent_exit[l] = uintBitsToFloat(0xff800000u);
   int it = 0;
   bool hit = false;
   ivec2 hit_c;
@@ -230,12 +234,13 @@ void main() {
         break;
       }
       if (overlap) {
+        parent_exit[level] = te;
         --level;  // something in this cell may meet the ray: look closer
       } else {
         t = te;
         nt = ne;
         bt = be;
-        if (level < top) ++level;  // empty so far: try a bigger stride
+        if (level < top && te >= parent_exit[level + 1]) ++level;  // empty so far: a bigger stride
       }
     }
     if (!test) return;
@@ -256,7 +261,7 @@ void main() {
     t = te;
     nt = ne;
     bt = be;
-    if (level < top) ++level;
+    if (level < top && te >= parent_exit[level + 1]) ++level;
     ++it;
   }
   // Outside the loops for the same reason: the outline test's five fetches
