@@ -165,6 +165,19 @@ struct Ray {
       te = std::min(te, (static_cast<float>(d[1] > 0.0f ? box[3] : box[1]) - f0[1]) * inv[1]);
     return te;
   }
+  // The levels whose cell the line leaves at te, where exit(box) gave te: a
+  // side of box at pixel coordinate b bounds the cells of every level m with
+  // 2^m dividing b (0: the image's edge, all of them). Bits 0..m, for the
+  // largest such m of the sides crossed at te; 0 when te is no side's.
+  unsigned left_levels(const int box[4], float te) const {
+    int m = -1;
+    for (int a = 0; a < 2; ++a) {
+      if (d[a] == 0.0f) continue;
+      const int b = d[a] > 0.0f ? box[2 + a] : box[a];
+      if ((static_cast<float>(b) - f0[a]) * inv[a] == te) m = std::max(m, b == 0 ? 31 : __builtin_ctz(b));
+    }
+    return m < 0 ? 0u : (m >= 31 ? ~0u : (2u << m) - 1u);
+  }
 };
 
 bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
@@ -310,16 +323,16 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
   float t = r.exit(box);
   float nt = r.num(t), bt = r.b(t);
   int level = 0;
-  // parent_exit[l]: where the ray leaves the cell of level l that it is in,
-  // once that cell is known to overlap it (it was the reason to go down a
-  // level), else -inf. While the ray is still inside such a cell, passing a
-  // cell below it is no reason to go back up: the cell above would be tested
-  // again over what is left of the same span and overlap again, most of the
-  // time (a ray skimming a floor went up and straight back down on 7 of its
-  // 27 steps). Which texels are tested does not change, only the steps to
-  // reach them, so fewer rays run out of their budget.
-  float parent_exit[kMaxLevels];
-  for (int l = 0; l <= top; ++l) parent_exit[l] = -kInf;
+  // Bit l of `known`: the cell of level l that the ray is in is known to
+  // overlap it (it was the reason to go down a level). While the ray is
+  // still inside such a cell, passing a cell below it is no reason to go
+  // back up: the cell above would be tested again over what is left of the
+  // same span and overlap again, most of the time (a ray skimming a floor
+  // went up and straight back down on 7 of its 27 steps). Which texels are
+  // tested does not change, only the steps to reach them, so fewer rays run
+  // out of their budget. A mask, not the cells' exits: the GL walk pays
+  // dearly for an array indexed by level.
+  unsigned known = 0;
   for (long it = 0; it < budget && t < r.t_end; ++it) {
     int i, j;
     cell_at(pyr, r, level, t, i, j);
@@ -331,7 +344,7 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
     // The depth span [min, max] of the two ends meets [c0, c1].
     if ((nt >= c[0] * bt || ne >= c[0] * be) && (nt <= c[1] * bt || ne <= c[1] * be)) {
       if (level > 0) {
-        parent_exit[level] = te;
+        known |= 1u << level;
         --level;  // something in this cell may meet the ray: look closer
         continue;
       }
@@ -355,7 +368,8 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
     bt = be;
     // Empty so far: try a bigger stride, unless still inside a cell above
     // that is known to overlap.
-    if (level < top && te >= parent_exit[level + 1]) ++level;
+    known &= ~r.left_levels(box, te);
+    if (level < top && !((known >> (level + 1)) & 1u)) ++level;
   }
 }
 
