@@ -52,20 +52,21 @@ float ray_exit(ivec4 box) {
 }
 
 // Ray::left_levels() in march_hiz.cpp: bits 0..m for the largest level m
-// whose cells the sides of box crossed at te bound; 0 when te is no side's.
+// whose cells the sides of box crossed at te bound (b ^ (b - 1) for a side at
+// b: bits 0..ctz(b), all for 0); 0 when te is no side's.
 uint left_levels(ivec4 box, float te) {
-  int m = -1;
+  uint left = 0u;
   if (g_d.x != 0.0) {
     int b = g_d.x > 0.0 ? box.z : box.x;
     precise float v = (float(b) - g_f0.x) * g_inv.x;
-    if (v == te) m = max(m, b == 0 ? 31 : findLSB(b));
+    left |= v == te ? uint(b ^ (b - 1)) : 0u;
   }
   if (g_d.y != 0.0) {
     int b = g_d.y > 0.0 ? box.w : box.y;
     precise float v = (float(b) - g_f0.y) * g_inv.y;
-    if (v == te) m = max(m, b == 0 ? 31 : findLSB(b));
+    left |= v == te ? uint(b ^ (b - 1)) : 0u;
   }
-  return m < 0 ? 0u : (m >= 31 ? 0xffffffffu : (2u << uint(m)) - 1u);
+  return left;
 }
 
 bool make_ray(ivec2 px) {

@@ -167,16 +167,17 @@ struct Ray {
   }
   // The levels whose cell the line leaves at te, where exit(box) gave te: a
   // side of box at pixel coordinate b bounds the cells of every level m with
-  // 2^m dividing b (0: the image's edge, all of them). Bits 0..m, for the
-  // largest such m of the sides crossed at te; 0 when te is no side's.
+  // 2^m dividing b (0: the image's edge, all of them), and b ^ (b - 1) has
+  // bits 0..ctz(b) set (all for 0). Bits 0..m, for the largest such m of the
+  // sides crossed at te; 0 when te is no side's.
   unsigned left_levels(const int box[4], float te) const {
-    int m = -1;
+    unsigned left = 0;
     for (int a = 0; a < 2; ++a) {
       if (d[a] == 0.0f) continue;
       const int b = d[a] > 0.0f ? box[2 + a] : box[a];
-      if ((static_cast<float>(b) - f0[a]) * inv[a] == te) m = std::max(m, b == 0 ? 31 : __builtin_ctz(b));
+      if ((static_cast<float>(b) - f0[a]) * inv[a] == te) left |= static_cast<unsigned>(b ^ (b - 1));
     }
-    return m < 0 ? 0u : (m >= 31 ? ~0u : (2u << m) - 1u);
+    return left;
   }
 };
 
