@@ -82,7 +82,7 @@ inline float texel_thickness(const Image& position, const Image* back, float thi
 
 // The plane row L of texel (x, y) in NDC (see plane_depth); false when the
 // texel has no usable normal or the plane is seen exactly edge-on.
-inline bool texel_plane(const Image& position, const Image& normal, const HizCamera& cam, int x, int y,
+inline bool texel_plane(const Image& position, const HizPlanes& normal, const HizCamera& cam, int x, int y,
                         float L[4]) {
   const float* n = normal.px(x, y);
   if (!normal_usable(n)) return false;
@@ -95,7 +95,7 @@ inline bool texel_plane(const Image& position, const Image& normal, const HizCam
 
 // Base level: each seen texel's [nearest, farthest + thickness] view distance
 // over its footprint.
-void base_range(const Image& position, const Image& normal, const Image* back, const HizCamera& cam,
+void base_range(const Image& position, const HizPlanes& normal, const Image* back, const HizCamera& cam,
                 float thickness, int x, int y, float out[2]) {
   const float* p = position.px(x, y);
   if (!texel_seen(p)) {
@@ -241,7 +241,7 @@ enum class TexelOutcome {
 // crossing found one texel late, and counts as a hit. `planes`: the plane
 // normals (hiz_plane_normals()). `located`: the hit was found on the texel's
 // plane (else only to the texel).
-TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera& cam, const Image* back,
+TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, const Image* back,
                        const Ray& r, int i, int j, float ta, float tb, float& t_hit, bool& located) {
   const Image& position = *s.position;
   const float* n = planes.px(i, j);
@@ -287,7 +287,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera
 // edges is unseen or lies behind the texel's plane by more than its
 // thickness. Its plane then covers its whole footprint although the object
 // covers only part of it, so a hit there may belong to what lies beyond.
-bool on_outline(const Image& position, const Image& normal, const Image* back, float thickness, int i,
+bool on_outline(const Image& position, const HizPlanes& normal, const Image* back, float thickness, int i,
                 int j) {
   const float* p = position.px(i, j);
   const float* n = normal.px(i, j);
@@ -310,7 +310,7 @@ inline float hit_visibility(float u, float v, bool certain) {
   return (certain ? 1.0f : kUncertain) * fade;
 }
 
-void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, const HizCamera& cam,
+void march_hiz(const MarchSetup& s, const HizPlanes& planes, const HizPyramid& pyr, const HizCamera& cam,
                const Image* back, int x, int y, float out[4]) {
   out[0] = out[1] = out[2] = out[3] = 0.0f;
   Ray r;
@@ -383,7 +383,7 @@ HizCamera hiz_camera(const Mat4& projection) {
   return cam;
 }
 
-HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads) {
   HizPyramid p;
   int w = position.width, h = position.height;
@@ -399,9 +399,9 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     h = std::max(1, h / 2);
   }
   p.levels = static_cast<int>(p.width.size());
-  p.range.resize(cells * 2);
+  p.range.reset(new float[cells * 2]);
   parallel_rows(0, position.height, threads, [&](int y) {
-    float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
+    float* row = p.range.get() + static_cast<size_t>(y) * position.width * 2;
     for (int x = 0; x < position.width; ++x)
       base_range(position, normal, back_position, cam, thickness, x, y, row + 2 * x);
   });
@@ -431,7 +431,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   Image out(in.position.width, in.position.height);
   const HizCamera cam = hiz_camera(in.projection);
-  const Image planes = hiz_plane_normals(in.position, in.normal, threads);
+  const HizPlanes planes = hiz_plane_normals(in.position, in.normal, threads);
   const HizPyramid pyr =
       build_hiz_pyramid(in.position, planes, in.back_position, cam, opt.thickness, threads);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
