@@ -2,16 +2,22 @@
 // Level 0 of the Hi-Z pyramid: each seen texel's nearest view distance over
 // its footprint (its tangent plane at the four corners) and its farthest plus
 // its thickness; (+inf, -inf) where nothing was seen. base_range() in
-// native/src/cpu/march_hiz.cpp, operation for operation.
+// native/src/cpu/march_hiz.cpp, operation for operation. The texel's plane
+// normal (hiz_planes.glsl) is worked out here and written beside it for the
+// walk: one pass over the G-buffer instead of two.
 #include "common.glsl"
 #include "fragment.glsl"
 #include "trace_common.glsl"
 #include "hiz_common.glsl"
+#include "hiz_planes.glsl"
 
 layout(location = 0) out vec2 out_range;
+layout(location = 1) out vec4 out_normal;
 
 void main() {
   ivec2 px = pixel_coord();
+  vec3 plane = plane_normal(px);
+  out_normal = vec4(plane, 0.0);
   vec4 p = texelFetch(u_position, px, 0);
   if (!texel_seen(p)) {
     out_range = vec2(uintBitsToFloat(0x7f800000u), uintBitsToFloat(0xff800000u));
@@ -22,7 +28,7 @@ void main() {
   float lo = d;
   float hi = d;
   vec4 L;
-  if (texel_plane(texelFetch(u_planes, px, 0).xyz, p.xyz, L)) {
+  if (texel_plane(plane, p.xyz, L)) {
     precise float spread = FOOTPRINT_SPREAD * abs(d) + t;
     precise float sxs = 2.0 / u_size.x;
     precise float sys = 2.0 / u_size.y;

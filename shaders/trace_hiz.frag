@@ -16,7 +16,7 @@ layout(location = 0) out vec4 out_uv;
 
 // The ray, in the homogeneous form of the CPU's Ray: at screen fraction t
 // the view point is A(t) / B(t).
-vec2 g_f0, g_d, g_inv;
+vec2 g_f0, g_d, g_inv, g_nudge;
 vec3 g_a0, g_da;
 float g_b0, g_db, g_t_end;
 
@@ -51,6 +51,24 @@ float ray_exit(ivec4 box) {
   return te;
 }
 
+// Ray::left_levels() in march_hiz.cpp: bits 0..m for the largest level m
+// whose cells the sides of box crossed at te bound (b ^ (b - 1) for a side at
+// b: bits 0..ctz(b), all for 0); 0 when te is no side's.
+uint left_levels(ivec4 box, float te) {
+  uint left = 0u;
+  if (g_d.x != 0.0) {
+    int b = g_d.x > 0.0 ? box.z : box.x;
+    precise float v = (float(b) - g_f0.x) * g_inv.x;
+    left |= v == te ? uint(b ^ (b - 1)) : 0u;
+  }
+  if (g_d.y != 0.0) {
+    int b = g_d.y > 0.0 ? box.w : box.y;
+    precise float v = (float(b) - g_f0.y) * g_inv.y;
+    left |= v == te ? uint(b ^ (b - 1)) : 0u;
+  }
+  return left;
+}
+
 bool make_ray(ivec2 px) {
   vec3 from, unit_from, normal;
   if (!read_origin(px, from, unit_from, normal)) return false;
@@ -73,6 +91,8 @@ bool make_ray(ivec2 px) {
   g_d = vec2(dx, dy);
   if (!finite_f(f0x) || !finite_f(f0y) || !finite_f(dx) || !finite_f(dy)) return false;
   g_inv = vec2(g_d.x != 0.0 ? 1.0 / g_d.x : 0.0, g_d.y != 0.0 ? 1.0 / g_d.y : 0.0);
+  g_nudge = vec2(g_d.x > 0.0 ? CELL_NUDGE : (g_d.x < 0.0 ? -CELL_NUDGE : 0.0),
+                 g_d.y > 0.0 ? CELL_NUDGE : (g_d.y < 0.0 ? -CELL_NUDGE : 0.0));
   g_b0 = b0;
   precise float db = b1 - b0;
   g_db = db;
@@ -86,11 +106,11 @@ bool make_ray(ivec2 px) {
 }
 
 ivec2 cell_at(int level, float t, ivec2 size) {
-  float nx = g_d.x > 0.0 ? CELL_NUDGE : (g_d.x < 0.0 ? -CELL_NUDGE : 0.0);
-  float ny = g_d.y > 0.0 ? CELL_NUDGE : (g_d.y < 0.0 ? -CELL_NUDGE : 0.0);
-  precise float px = g_f0.x + t * g_d.x + nx;
-  precise float py = g_f0.y + t * g_d.y + ny;
-  precise float scale = 1.0 / float(1 << level);
+  precise float px = g_f0.x + t * g_d.x + g_nudge.x;
+  precise float py = g_f0.y + t * g_d.y + g_nudge.y;
+  // 2^-level from its exponent bits: exactly 1 / 2^level, without a division
+  // per step.
+  float scale = uintBitsToFloat(uint(127 - level) << 23);
   precise float sx = px * scale;
   precise float sy = py * scale;
   int i = !(sx > 0.0) ? 0 : (sx >= float(size.x) ? size.x - 1 : int(sx));
@@ -193,6 +213,9 @@ void main() {
   float nt = ray_num(t);
   float bt = ray_b(t);
   int level = 0;
+  // Bit l: the cell of level l the ray is in is known to overlap it
+  // (march_hiz() says why).
+  uint known = 0u;
   int it = 0;
   bool hit = false;
   ivec2 hit_c;
@@ -207,6 +230,7 @@ void main() {
   while (it < budget && t < g_t_end) {
     bool test = false;
     ivec2 c;
+    ivec4 box;
     float te, ne, be;
     for (; it < budget && t < g_t_end; ++it) {
       // Level sizes by shift (GL's iterated floor(size / 2) is floor(size / 2^level),
@@ -215,7 +239,8 @@ void main() {
       // `continue` for the same reason.
       ivec2 size = max(ivec2(1), ivec2(u_size) >> level);
       c = cell_at(level, t, size);
-      te = ray_exit(cell_bounds(level, c, size));
+      box = cell_bounds(level, c, size);
+      te = ray_exit(box);
       if (!(te > t)) te = uintBitsToFloat(floatBitsToUint(t) + 1u);  // always move on (t >= 0)
       ne = ray_num(te);
       be = ray_b(te);
@@ -230,12 +255,14 @@ void main() {
         break;
       }
       if (overlap) {
+        known |= 1u << uint(level);
         --level;  // something in this cell may meet the ray: look closer
       } else {
         t = te;
         nt = ne;
         bt = be;
-        if (level < top) ++level;  // empty so far: try a bigger stride
+        known &= ~left_levels(box, te);
+        if (level < top && ((known >> uint(level + 1)) & 1u) == 0u) ++level;  // empty so far: a bigger stride
       }
     }
     if (!test) return;
@@ -256,7 +283,8 @@ void main() {
     t = te;
     nt = ne;
     bt = be;
-    if (level < top) ++level;
+    known &= ~left_levels(box, te);
+    if (level < top && ((known >> uint(level + 1)) & 1u) == 0u) ++level;
     ++it;
   }
   // Outside the loops for the same reason: the outline test's five fetches

@@ -3,6 +3,7 @@
 // trace_hiz.frag; docs/marches.md explains the method.
 #pragma once
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "glint/image.h"
@@ -23,13 +24,14 @@ struct HizPyramid {
   // (over each texel's whole footprint, not only its centre), and the
   // farthest view distance its surfaces reach once their thickness is added.
   // Cells with nothing seen hold (+inf, -inf) and never overlap a ray.
-  std::vector<float> range;
+  // Not zero-filled: every cell is written once, by the worker threads.
+  std::unique_ptr<float[]> range;
 
   size_t index(int level, int i, int j) const {
     return offset[level] + static_cast<size_t>(j) * width[level] + i;
   }
-  const float* cell(int level, int i, int j) const { return range.data() + index(level, i, j) * 2; }
-  float* cell(int level, int i, int j) { return range.data() + index(level, i, j) * 2; }
+  const float* cell(int level, int i, int j) const { return range.get() + index(level, i, j) * 2; }
+  float* cell(int level, int i, int j) { return range.get() + index(level, i, j) * 2; }
 };
 
 // The inverse projection as floats, row-major: what the base level needs to
@@ -39,6 +41,16 @@ struct HizCamera {
 };
 HizCamera hiz_camera(const Mat4& projection);
 
+// xyz per texel, row-major. Not zero-filled: hiz_plane_normals() writes
+// every texel once on the worker threads, where zero-filling 25 MB (at 1080p)
+// cost a serial pass over fresh pages on the calling thread each frame.
+struct HizPlanes {
+  int width = 0, height = 0;
+  std::unique_ptr<float[]> xyz;
+  const float* px(int x, int y) const { return xyz.get() + (static_cast<size_t>(y) * width + x) * 3; }
+  float* px(int x, int y) { return xyz.get() + (static_cast<size_t>(y) * width + x) * 3; }
+};
+
 // The normal of each texel's tangent plane, for the pyramid's base and the
 // texel test (never the ray's direction, which follows the shading normal):
 // the surface's geometric normal from the position buffer, so that a normal
@@ -47,11 +59,11 @@ HizCamera hiz_camera(const Mat4& projection);
 // silhouette does not bend it); the shading normal where an axis has no seen
 // neighbour or the texel none usable. xyz unit length, facing the side the
 // shading normal is on.
-Image hiz_plane_normals(const Image& position, const Image& normal, int threads);
+HizPlanes hiz_plane_normals(const Image& position, const Image& normal, int threads);
 
 // `normal` holds the plane normals above. Per-texel thickness: back_position's view distance minus the front's where
 // a back surface is known and behind, else `thickness`.
-HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads);
 
 // Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).

@@ -51,7 +51,6 @@ void plane_normal(const Image& position, const Image& normal, int x, int y, floa
   out[0] = s[0];
   out[1] = s[1];
   out[2] = s[2];
-  out[3] = 0.0f;
   const float* p = position.px(x, y);
   if (!texel_seen(p) || !(s[0] - s[0] == 0.0f && s[1] - s[1] == 0.0f && s[2] - s[2] == 0.0f) ||
       (s[0] == 0.0f && s[1] == 0.0f && s[2] == 0.0f))
@@ -71,8 +70,11 @@ void plane_normal(const Image& position, const Image& normal, int x, int y, floa
 
 }  // namespace
 
-Image hiz_plane_normals(const Image& position, const Image& normal, int threads) {
-  Image out(position.width, position.height);
+HizPlanes hiz_plane_normals(const Image& position, const Image& normal, int threads) {
+  HizPlanes out;
+  out.width = position.width;
+  out.height = position.height;
+  out.xyz.reset(new float[position.pixel_count() * 3]);
   parallel_rows(0, position.height, threads, [&](int y) {
     for (int x = 0; x < position.width; ++x) plane_normal(position, normal, x, y, out.px(x, y));
   });

@@ -55,6 +55,8 @@ constexpr float kUncertain = 0.5f;
 // view distance (plus its thickness): a plane seen edge-on would otherwise
 // reach infinity and make every cell above it overlap every ray.
 constexpr float kFootprintSpread = 0.5f;
+// Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
+constexpr int kMaxLevels = 32;
 
 // The tangent plane's view distance at screen point (sx, sy) in NDC: the
 // plane is L . (sx, sy, sz, 1) = 0 in NDC (L = n^T H_xyz - k H_w), which
@@ -80,7 +82,7 @@ inline float texel_thickness(const Image& position, const Image* back, float thi
 
 // The plane row L of texel (x, y) in NDC (see plane_depth); false when the
 // texel has no usable normal or the plane is seen exactly edge-on.
-inline bool texel_plane(const Image& position, const Image& normal, const HizCamera& cam, int x, int y,
+inline bool texel_plane(const Image& position, const HizPlanes& normal, const HizCamera& cam, int x, int y,
                         float L[4]) {
   const float* n = normal.px(x, y);
   if (!normal_usable(n)) return false;
@@ -93,7 +95,7 @@ inline bool texel_plane(const Image& position, const Image& normal, const HizCam
 
 // Base level: each seen texel's [nearest, farthest + thickness] view distance
 // over its footprint.
-void base_range(const Image& position, const Image& normal, const Image* back, const HizCamera& cam,
+void base_range(const Image& position, const HizPlanes& normal, const Image* back, const HizCamera& cam,
                 float thickness, int x, int y, float out[2]) {
   const float* p = position.px(x, y);
   if (!texel_seen(p)) {
@@ -163,6 +165,20 @@ struct Ray {
       te = std::min(te, (static_cast<float>(d[1] > 0.0f ? box[3] : box[1]) - f0[1]) * inv[1]);
     return te;
   }
+  // The levels whose cell the line leaves at te, where exit(box) gave te: a
+  // side of box at pixel coordinate b bounds the cells of every level m with
+  // 2^m dividing b (0: the image's edge, all of them), and b ^ (b - 1) has
+  // bits 0..ctz(b) set (all for 0). Bits 0..m, for the largest such m of the
+  // sides crossed at te; 0 when te is no side's.
+  unsigned left_levels(const int box[4], float te) const {
+    unsigned left = 0;
+    for (int a = 0; a < 2; ++a) {
+      if (d[a] == 0.0f) continue;
+      const int b = d[a] > 0.0f ? box[2 + a] : box[a];
+      if ((static_cast<float>(b) - f0[a]) * inv[a] == te) left |= static_cast<unsigned>(b ^ (b - 1));
+    }
+    return left;
+  }
 };
 
 bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
@@ -225,7 +241,7 @@ enum class TexelOutcome {
 // crossing found one texel late, and counts as a hit. `planes`: the plane
 // normals (hiz_plane_normals()). `located`: the hit was found on the texel's
 // plane (else only to the texel).
-TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera& cam, const Image* back,
+TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, const Image* back,
                        const Ray& r, int i, int j, float ta, float tb, float& t_hit, bool& located) {
   const Image& position = *s.position;
   const float* n = planes.px(i, j);
@@ -271,7 +287,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const Image& planes, const HizCamera
 // edges is unseen or lies behind the texel's plane by more than its
 // thickness. Its plane then covers its whole footprint although the object
 // covers only part of it, so a hit there may belong to what lies beyond.
-bool on_outline(const Image& position, const Image& normal, const Image* back, float thickness, int i,
+bool on_outline(const Image& position, const HizPlanes& normal, const Image* back, float thickness, int i,
                 int j) {
   const float* p = position.px(i, j);
   const float* n = normal.px(i, j);
@@ -294,7 +310,7 @@ inline float hit_visibility(float u, float v, bool certain) {
   return (certain ? 1.0f : kUncertain) * fade;
 }
 
-void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, const HizCamera& cam,
+void march_hiz(const MarchSetup& s, const HizPlanes& planes, const HizPyramid& pyr, const HizCamera& cam,
                const Image* back, int x, int y, float out[4]) {
   out[0] = out[1] = out[2] = out[3] = 0.0f;
   Ray r;
@@ -308,6 +324,16 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
   float t = r.exit(box);
   float nt = r.num(t), bt = r.b(t);
   int level = 0;
+  // Bit l of `known`: the cell of level l that the ray is in is known to
+  // overlap it (it was the reason to go down a level). While the ray is
+  // still inside such a cell, passing a cell below it is no reason to go
+  // back up: the cell above would be tested again over what is left of the
+  // same span and overlap again, most of the time (a ray skimming a floor
+  // went up and straight back down on 7 of its 27 steps). Which texels are
+  // tested does not change, only the steps to reach them, so fewer rays run
+  // out of their budget. A mask, not the cells' exits: the GL walk pays
+  // dearly for an array indexed by level.
+  unsigned known = 0;
   for (long it = 0; it < budget && t < r.t_end; ++it) {
     int i, j;
     cell_at(pyr, r, level, t, i, j);
@@ -319,6 +345,7 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
     // The depth span [min, max] of the two ends meets [c0, c1].
     if ((nt >= c[0] * bt || ne >= c[0] * be) && (nt <= c[1] * bt || ne <= c[1] * be)) {
       if (level > 0) {
+        known |= 1u << level;
         --level;  // something in this cell may meet the ray: look closer
         continue;
       }
@@ -340,7 +367,10 @@ void march_hiz(const MarchSetup& s, const Image& planes, const HizPyramid& pyr, 
     t = te;
     nt = ne;
     bt = be;
-    if (level < top) ++level;  // empty so far: try a bigger stride
+    // Empty so far: try a bigger stride, unless still inside a cell above
+    // that is known to overlap.
+    known &= ~r.left_levels(box, te);
+    if (level < top && !((known >> (level + 1)) & 1u)) ++level;
   }
 }
 
@@ -353,7 +383,7 @@ HizCamera hiz_camera(const Mat4& projection) {
   return cam;
 }
 
-HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads) {
   HizPyramid p;
   int w = position.width, h = position.height;
@@ -369,9 +399,9 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     h = std::max(1, h / 2);
   }
   p.levels = static_cast<int>(p.width.size());
-  p.range.resize(cells * 2);
+  p.range.reset(new float[cells * 2]);
   parallel_rows(0, position.height, threads, [&](int y) {
-    float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
+    float* row = p.range.get() + static_cast<size_t>(y) * position.width * 2;
     for (int x = 0; x < position.width; ++x)
       base_range(position, normal, back_position, cam, thickness, x, y, row + 2 * x);
   });
@@ -401,7 +431,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   Image out(in.position.width, in.position.height);
   const HizCamera cam = hiz_camera(in.projection);
-  const Image planes = hiz_plane_normals(in.position, in.normal, threads);
+  const HizPlanes planes = hiz_plane_normals(in.position, in.normal, threads);
   const HizPyramid pyr =
       build_hiz_pyramid(in.position, planes, in.back_position, cam, opt.thickness, threads);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);

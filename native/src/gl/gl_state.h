@@ -58,7 +58,8 @@ class GlState {
   // An RG32F texture with every mip level down to 1x1, kept between frames.
   void pyramid_target(int w, int h);
 
-  void attach_level(GLuint tex, int level);
+  // `second`, when given, is written at location 1 (level 0, same size).
+  void attach_level(GLuint tex, int level, const Texture* second = nullptr);
   // Levels 1..levels-1 of `tex`, each drawn by `reduce` from the level below
   // (u_src on unit 5, u_sizes = source w, h, this level's w, h) while that
   // level is the only one visible, so no pass samples what it writes; then

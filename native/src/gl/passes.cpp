@@ -59,14 +59,8 @@ void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, cons
                    const Texture& nrm, const Texture* back) {
   const int w = in.position.width, h = in.position.height;
   pyramid_target(w, h);
-  // The plane normals first: the base level and the walk read them.
-  const GLuint planes = program("hiz_planes.frag");
-  gl_.UseProgram(planes);
-  bind(planes, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(planes, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  gl_.Uniform2f(loc(planes, "u_size"), static_cast<float>(w), static_cast<float>(h));
-  attach(target(kPlanes, w, h, "the hiz plane normals", 1));
-  draw(w, h);
+  const Texture& planes = target(kPlanes, w, h, "the hiz plane normals", 1);
+  // The base level and the plane normals (which the walk reads) in one pass.
   const GLuint base = program("hiz_base.frag");
   gl_.UseProgram(base);
   bind(base, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -74,7 +68,7 @@ void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, cons
   bind_hiz_inputs(base, in, pos, back);
   gl_.Uniform2f(loc(base, "u_size"), static_cast<float>(w), static_cast<float>(h));
   gl_.Uniform1f(loc(base, "u_thickness"), opt.thickness);
-  attach_level(pyramid_.id, 0);
+  attach_level(pyramid_.id, 0, &planes);
   draw(w, h);
   reduce_levels(pyramid_.id, pyramid_.levels, program("hiz_reduce.frag"), w, h);
   debug_check("hiz pyramid");

@@ -60,11 +60,14 @@ void GlState::pyramid_target(int w, int h) {
   pyramid_.levels = levels;
 }
 
-void GlState::attach_level(GLuint tex, int level) {
+void GlState::attach_level(GLuint tex, int level, const Texture* second) {
   gl_.BindFramebuffer(GL_FRAMEBUFFER, fbo_);
   gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, level);
-  const GLenum buf = GL_COLOR_ATTACHMENT0;
-  gl_.DrawBuffers(1, &buf);
+  // Attachment 1 only while a pass writes it: a texture left attached would
+  // be a feedback loop for the passes that read it.
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, second ? second->id : 0, 0);
+  const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  gl_.DrawBuffers(second ? 2 : 1, bufs);
   if (gl_.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw Error("glint GL: level " + std::to_string(level) + " of the hiz pyramid cannot be rendered to on " +
                 info().renderer);

@@ -1,13 +1,8 @@
-#version 430 core
 // The hiz march's plane normals: each texel's geometric normal from the
-// position buffer, the shading normal where that cannot be had. Written once
-// per frame for hiz_base.frag and trace_hiz.frag. hiz_plane_normals() in
-// native/src/cpu/hiz_planes.cpp, operation for operation.
-#include "common.glsl"
-#include "fragment.glsl"
-#include "trace_common.glsl"
-
-layout(location = 0) out vec4 out_normal;
+// position buffer, the shading normal where that cannot be had. hiz_base.frag
+// writes them once per frame, beside the pyramid's base, for trace_hiz.frag.
+// hiz_plane_normals() in native/src/cpu/hiz_planes.cpp, operation for
+// operation. Needs common.glsl and trace_common.glsl.
 
 // The seen texel `k` steps along `step`, or false.
 bool neighbour(ivec2 px, ivec2 step, int k, out vec4 q) {
@@ -59,21 +54,19 @@ bool axis_difference(ivec2 px, vec3 p, ivec2 step, out vec3 e) {
   return true;
 }
 
-void main() {
-  ivec2 px = pixel_coord();
+vec3 plane_normal(ivec2 px) {
   vec3 s = texelFetch(u_normal, px, 0).xyz;
-  out_normal = vec4(s, 0.0);
   vec4 p = texelFetch(u_position, px, 0);
-  if (!texel_seen(p) || !finite_v3(s) || (s.x == 0.0 && s.y == 0.0 && s.z == 0.0)) return;
+  if (!texel_seen(p) || !finite_v3(s) || (s.x == 0.0 && s.y == 0.0 && s.z == 0.0)) return s;
   vec3 ex;
   vec3 ey;
-  if (!axis_difference(px, p.xyz, ivec2(1, 0), ex) || !axis_difference(px, p.xyz, ivec2(0, 1), ey)) return;
+  if (!axis_difference(px, p.xyz, ivec2(1, 0), ex) || !axis_difference(px, p.xyz, ivec2(0, 1), ey)) return s;
   precise vec3 c = vec3(ex.y * ey.z - ex.z * ey.y, ex.z * ey.x - ex.x * ey.z, ex.x * ey.y - ex.y * ey.x);
   precise float len2 = c.x * c.x + c.y * c.y + c.z * c.z;
-  if (!(len2 > 0.0) || !finite_f(len2)) return;
+  if (!(len2 > 0.0) || !finite_f(len2)) return s;
   precise float inv = 1.0 / sqrt(len2);
   precise float side = s.x * c.x + s.y * c.y + s.z * c.z;
   if (side < 0.0) inv = -inv;
   precise vec3 n = vec3(c.x * inv, c.y * inv, c.z * inv);
-  out_normal = vec4(n, 0.0);
+  return n;
 }
