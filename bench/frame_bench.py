@@ -33,6 +33,8 @@ import time
 import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import blender_scene_kit as kit  # noqa: E402
 ROOT = os.path.dirname(HERE)
 
 
@@ -58,23 +60,10 @@ def _args():
     return opts
 
 
-def _register_addon(parent):
-    os.environ.setdefault("GLINT_CORE_PATH", os.path.join(ROOT, "build", "python"))
-    sys.path.insert(0, parent)
-    import glint
-    glint.register()
-    return glint
+_register_addon = kit.register_addon
 
 
-def _material(name, colour, roughness, specular=0.5, metallic=0.0):
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    p = mat.node_tree.nodes["Principled BSDF"]
-    p.inputs["Base Color"].default_value = (*colour, 1.0)
-    p.inputs["Roughness"].default_value = roughness
-    p.inputs["Metallic"].default_value = metallic
-    p.inputs["Specular"].default_value = specular
-    return mat
+_material = kit.principled
 
 
 def build_scene(size, samples):

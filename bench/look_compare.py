@@ -41,6 +41,8 @@ import numpy as np
 from mathutils import Vector
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import blender_scene_kit as kit  # noqa: E402
 ROOT = os.path.dirname(HERE)
 SCENES = ("floor", "rough", "metal", "corridor")
 METHODS = ("cycles", "ssr", "glint")
@@ -83,27 +85,14 @@ def _args():
     return opts
 
 
-def _register_addon(parent):
-    os.environ.setdefault("GLINT_CORE_PATH", os.path.join(ROOT, "build", "python"))
-    sys.path.insert(0, parent)
-    import glint
-    glint.register()
-    return glint
+_register_addon = kit.register_addon
 
 
 # ----------------------------------------------------------------------------
 # Scenes
 
 
-def _material(name, colour, roughness, specular=0.5, metallic=0.0):
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    p = mat.node_tree.nodes["Principled BSDF"]
-    p.inputs["Base Color"].default_value = (*colour, 1.0)
-    p.inputs["Roughness"].default_value = roughness
-    p.inputs["Metallic"].default_value = metallic
-    p.inputs["Specular"].default_value = specular
-    return mat
+_material = kit.principled
 
 
 def _diffuse(name, colour):

@@ -1,0 +1,32 @@
+"""What the benches that run inside Blender share (bench/frame_bench.py,
+bench/look_compare.py): registering the add-on from a folder, and a Principled
+material from a few values. Importable only under Blender (bpy)."""
+from __future__ import annotations
+
+import os
+import sys
+
+import bpy
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def register_addon(parent):
+    """Register glint/ from ``parent``; the core comes from GLINT_CORE_PATH
+    (default: <checkout>/build/python)."""
+    os.environ.setdefault("GLINT_CORE_PATH", os.path.join(ROOT, "build", "python"))
+    sys.path.insert(0, parent)
+    import glint
+    glint.register()
+    return glint
+
+
+def principled(name, colour, roughness, specular=0.5, metallic=0.0):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    p = mat.node_tree.nodes["Principled BSDF"]
+    p.inputs["Base Color"].default_value = (*colour, 1.0)
+    p.inputs["Roughness"].default_value = roughness
+    p.inputs["Metallic"].default_value = metallic
+    p.inputs["Specular"].default_value = specular
+    return mat
