@@ -1,7 +1,7 @@
 // The hiz march's plane normals: each texel's geometric normal from the
 // position buffer, the shading normal where that cannot be had. hiz_base.frag
 // writes them once per frame, beside the pyramid's base, for trace_hiz.frag.
-// hiz_plane_normals() in native/src/cpu/hiz_planes.cpp, operation for
+// hiz_plane_normals_row() in native/src/cpu/hiz_planes.cpp, operation for
 // operation. Needs common.glsl and trace_common.glsl.
 
 // The seen texel `k` steps along `step`, or false.

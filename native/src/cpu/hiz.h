@@ -41,7 +41,7 @@ struct HizCamera {
 };
 HizCamera hiz_camera(const Mat4& projection);
 
-// xyz per texel, row-major. Not zero-filled: hiz_plane_normals() writes
+// xyz per texel, row-major. Not zero-filled: build_hiz_pyramid() writes
 // every texel once on the worker threads, where zero-filling 25 MB (at 1080p)
 // cost a serial pass over fresh pages on the calling thread each frame.
 struct HizPlanes {
@@ -58,13 +58,17 @@ struct HizPlanes {
 // the seen neighbour whose view distance is closer to the texel's own (so a
 // silhouette does not bend it); the shading normal where an axis has no seen
 // neighbour or the texel none usable. xyz unit length, facing the side the
-// shading normal is on.
-HizPlanes hiz_plane_normals(const Image& position, const Image& normal, int threads);
+// shading normal is on. Row y of them, into `out` (sized to the image).
+void hiz_plane_normals_row(const Image& position, const Image& normal, int y, HizPlanes& out);
 
-// `normal` holds the plane normals above. Per-texel thickness: back_position's view distance minus the front's where
-// a back surface is known and behind, else `thickness`.
-HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, const Image* back_position,
-                             const HizCamera& cam, float thickness, int threads);
+// The pyramid, and into `planes` the plane normals above that its base and
+// the walk use: both in one pass over the G-buffer, a row of normals and
+// then the same row of the base while the row is in the cache. `normal` is
+// the shading normal. Per-texel thickness: back_position's view distance
+// minus the front's where a back surface is known and behind, else
+// `thickness`.
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads, HizPlanes& planes);
 
 // Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).
 inline void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {

@@ -5,7 +5,6 @@
 
 #include "glint/stages.h"
 #include "hiz.h"
-#include "parallel.h"
 
 namespace glint::cpu {
 namespace {
@@ -70,15 +69,8 @@ void plane_normal(const Image& position, const Image& normal, int x, int y, floa
 
 }  // namespace
 
-HizPlanes hiz_plane_normals(const Image& position, const Image& normal, int threads) {
-  HizPlanes out;
-  out.width = position.width;
-  out.height = position.height;
-  out.xyz.reset(new float[position.pixel_count() * 3]);
-  parallel_rows(0, position.height, threads, [&](int y) {
-    for (int x = 0; x < position.width; ++x) plane_normal(position, normal, x, y, out.px(x, y));
-  });
-  return out;
+void hiz_plane_normals_row(const Image& position, const Image& normal, int y, HizPlanes& out) {
+  for (int x = 0; x < position.width; ++x) plane_normal(position, normal, x, y, out.px(x, y));
 }
 
 }  // namespace glint::cpu

@@ -12,7 +12,7 @@
 // whole cell at a time and no interval of depth is ever jumped over.
 //
 // At a texel the surface is the texel's tangent plane (its position and
-// geometric normal, hiz_plane_normals()), not a flat depth: its depth range covers the texel's footprint, so
+// geometric normal, hiz_plane_normals_row()), not a flat depth: its depth range covers the texel's footprint, so
 // a wall seen at a grazing angle is continuous instead of a staircase, and a
 // hit is where the ray crosses that plane, to a fraction of a texel. A ray
 // that stays in front of the plane is no hit, which is what keeps a floor's
@@ -239,7 +239,7 @@ enum class TexelOutcome {
 // or it is behind the plane at the texel, where the texel's thickness says
 // whether that is solid. Being behind by no more than a rounding slack is a
 // crossing found one texel late, and counts as a hit. `planes`: the plane
-// normals (hiz_plane_normals()). `located`: the hit was found on the texel's
+// normals (hiz_plane_normals_row()). `located`: the hit was found on the texel's
 // plane (else only to the texel).
 TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, const Image* back,
                        const Ray& r, int i, int j, float ta, float tb, float& t_hit, bool& located) {
@@ -383,8 +383,8 @@ HizCamera hiz_camera(const Mat4& projection) {
   return cam;
 }
 
-HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, const Image* back_position,
-                             const HizCamera& cam, float thickness, int threads) {
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads, HizPlanes& planes) {
   HizPyramid p;
   int w = position.width, h = position.height;
   size_t cells = 0;
@@ -400,10 +400,14 @@ HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, con
   }
   p.levels = static_cast<int>(p.width.size());
   p.range.reset(new float[cells * 2]);
+  planes.width = position.width;
+  planes.height = position.height;
+  planes.xyz.reset(new float[position.pixel_count() * 3]);
   parallel_rows(0, position.height, threads, [&](int y) {
+    hiz_plane_normals_row(position, normal, y, planes);
     float* row = p.range.get() + static_cast<size_t>(y) * position.width * 2;
     for (int x = 0; x < position.width; ++x)
-      base_range(position, normal, back_position, cam, thickness, x, y, row + 2 * x);
+      base_range(position, planes, back_position, cam, thickness, x, y, row + 2 * x);
   });
   for (int l = 1; l < p.levels; ++l) {
     const int pw = p.width[l - 1], ph = p.height[l - 1];
@@ -431,9 +435,9 @@ HizPyramid build_hiz_pyramid(const Image& position, const HizPlanes& normal, con
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   Image out(in.position.width, in.position.height);
   const HizCamera cam = hiz_camera(in.projection);
-  const HizPlanes planes = hiz_plane_normals(in.position, in.normal, threads);
+  HizPlanes planes;
   const HizPyramid pyr =
-      build_hiz_pyramid(in.position, planes, in.back_position, cam, opt.thickness, threads);
+      build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads, planes);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
   const Image* spec = in.specular;
   parallel_rows(0, out.height, threads, [&](int y) {
