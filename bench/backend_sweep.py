@@ -20,45 +20,12 @@ import time
 
 import numpy as np
 
+from scene_meshes import floor, perspective, sphere  # bench/, beside this script
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(ROOT, "build")), "python"))
 
 import glint_core  # noqa: E402
-
-
-def floor(n=8, y=-1.0, x=(-10.0, 10.0), z=(-2.0, -20.0), mat=1):
-    xs, zs = np.linspace(*x, n + 1), np.linspace(*z, n + 1)
-    tris = []
-    for i in range(n):
-        for j in range(n):
-            a, b = (xs[i], y, zs[j]), (xs[i + 1], y, zs[j])
-            c, d = (xs[i + 1], y, zs[j + 1]), (xs[i], y, zs[j + 1])
-            tris += [(a, c, b), (a, d, c)]
-    p = np.array(tris, np.float32)
-    n_ = np.zeros_like(p)
-    n_[..., 1] = 1.0
-    return p, n_, np.full(len(p), mat, np.int32)
-
-
-def sphere(seg, centre=(0.0, 0.0, -6.0), r=1.0, mat=2):
-    th, ph = np.linspace(0, np.pi, seg + 1), np.linspace(0, 2 * np.pi, 2 * seg + 1)
-    c = np.array(centre)
-
-    def at(t, f):
-        return c + r * np.array([np.sin(t) * np.cos(f), np.cos(t), np.sin(t) * np.sin(f)])
-    tris = []
-    for i in range(seg):
-        for j in range(2 * seg):
-            a, b, cc, d = at(th[i], ph[j]), at(th[i + 1], ph[j]), at(th[i + 1], ph[j + 1]), at(th[i], ph[j + 1])
-            tris += [(a, b, cc), (a, cc, d)]
-    p = np.array(tris, np.float32)
-    return p, ((p - c) / r).astype(np.float32), np.full(len(p), mat, np.int32)
-
-
-def perspective(w, h, fov=np.radians(50.0), near=0.1, far=100.0):
-    t = 1.0 / np.tan(fov / 2)
-    return np.array([[t * h / w, 0, 0, 0], [0, t, 0, 0],
-                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]], np.float32)
 
 
 def main():

@@ -25,49 +25,17 @@ import time
 
 import numpy as np
 
+from scene_meshes import floor, perspective, sphere  # bench/, beside this script
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def floor(n=16, y=-1.0):
-    xs, zs = np.linspace(-10.0, 10.0, n + 1), np.linspace(-2.0, -20.0, n + 1)
-    tris = []
-    for i in range(n):
-        for j in range(n):
-            a, b = (xs[i], y, zs[j]), (xs[i + 1], y, zs[j])
-            c, d = (xs[i + 1], y, zs[j + 1]), (xs[i], y, zs[j + 1])
-            tris += [(a, c, b), (a, d, c)]
-    p = np.array(tris, np.float32)
-    nrm = np.zeros_like(p)
-    nrm[..., 1] = 1.0
-    return p, nrm, np.zeros(len(p), np.int32)
-
-
-def sphere(seg, centre, r, mat):
-    th, ph = np.linspace(0, np.pi, seg + 1), np.linspace(0, 2 * np.pi, 2 * seg + 1)
-    t0, t1 = th[:-1, None], th[1:, None]
-    f0, f1 = ph[None, :-1], ph[None, 1:]
-
-    def at(t, f):
-        d = np.stack(np.broadcast_arrays(np.sin(t) * np.cos(f), np.cos(t) + 0 * f, np.sin(t) * np.sin(f)), -1)
-        return d.reshape(-1, 3)
-    a, b, c, d = at(t0, f0), at(t1, f0), at(t1, f1), at(t0, f1)
-    dirs = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
-    p = (np.asarray(centre) + r * dirs).astype(np.float32)
-    return p, dirs.astype(np.float32), np.full(len(p), mat, np.int32)
 
 
 def scene(triangles):
     """The floor and four spheres, ~`triangles` in all (4 spheres of 4 seg^2 each)."""
     seg = max(2, round(np.sqrt(max(0, triangles - 512) / 16)))
-    parts = [floor()] + [sphere(seg, c, r, k + 1) for k, (c, r) in enumerate(
+    parts = [floor(n=16, mat=0)] + [sphere(seg, c, r, k + 1) for k, (c, r) in enumerate(
         [((-2.5, 0.0, -7.0), 1.0), ((0.0, 0.2, -9.0), 1.2), ((2.5, -0.2, -6.0), 0.8), ((0.8, 1.5, -12.0), 1.5)])]
     return tuple(np.concatenate(x) for x in zip(*parts))
-
-
-def perspective(w, h, fov=np.radians(50.0), near=0.1, far=100.0):
-    t = 1.0 / np.tan(fov / 2)
-    return np.array([[t * h / w, 0, 0, 0], [0, t, 0, 0],
-                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]], np.float32)
 
 
 MATERIALS = np.array([[0.5, 0.5, 0.5, 127.75], [0.9, 0.1, 0.1, 40.0], [0.1, 0.9, 0.1, 60.0],
