@@ -1,6 +1,7 @@
 """What the benches that run inside Blender share (bench/frame_bench.py,
-bench/look_compare.py): registering the add-on from a folder, and a Principled
-material from a few values. Importable only under Blender (bpy)."""
+bench/look_compare.py): their options after Blender's "--", registering the
+add-on from a folder, and a Principled material from a few values. Importable
+only under Blender (bpy)."""
 from __future__ import annotations
 
 import os
@@ -9,6 +10,26 @@ import sys
 import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def script_options(defaults, parse):
+    """``--key value`` pairs after Blender's ``--`` over ``defaults``; each value
+    goes through ``parse[key]`` (as it is when absent), which raises ValueError
+    naming what was wrong."""
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    opts = dict(defaults)
+    for i in range(0, len(argv), 2):
+        key, value = argv[i].lstrip("-"), argv[i + 1] if i + 1 < len(argv) else None
+        if value is None or key not in opts:
+            raise ValueError(f"{argv[i]}: expected one of --{', --'.join(opts)} with a value")
+        opts[key] = parse.get(key, str)(value)
+    return opts
+
+
+def frame_size(value):
+    """'WxH' -> (W, H)."""
+    w, h = value.lower().split("x")
+    return int(w), int(h)
 
 
 def register_addon(parent):

@@ -39,25 +39,11 @@ ROOT = os.path.dirname(HERE)
 
 
 def _args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    opts = {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO",
-            "addon": os.path.join(ROOT, "addon")}
-    i = 0
-    while i < len(argv):
-        key, value = argv[i].lstrip("-"), argv[i + 1] if i + 1 < len(argv) else None
-        if value is None or key not in opts:
-            raise ValueError(f"{argv[i]}: expected one of --{', --'.join(opts)} with a value")
-        if key == "size":
-            w, h = value.lower().split("x")
-            opts[key] = (int(w), int(h))
-        elif key in ("rounds", "samples"):
-            opts[key] = int(value)
-        elif key == "addon":
-            opts[key] = os.path.abspath(value)
-        else:
-            opts[key] = value.upper()
-        i += 2
-    return opts
+    return kit.script_options(
+        {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO",
+         "addon": os.path.join(ROOT, "addon")},
+        {"size": kit.frame_size, "rounds": int, "samples": int, "preset": str.upper, "backend": str.upper,
+         "addon": os.path.abspath})
 
 
 _register_addon = kit.register_addon

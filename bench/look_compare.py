@@ -52,37 +52,31 @@ LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)  # Rec. 709, Blender
 REFLECTION_GAIN = 2.0
 
 
+def _at_least(parse, least, key):
+    def check(value):
+        v = parse(value)
+        if (min(v) if isinstance(v, tuple) else v) < least:
+            raise ValueError(f"--{key} {value}: too small (at least {least})")
+        return v
+    return check
+
+
+def _scene_names(value):
+    names = [s for s in value.split(",") if s]
+    unknown = [s for s in names if s not in SCENES]
+    if unknown or not names:
+        raise ValueError(f"--scenes {value}: choose among {','.join(SCENES)}")
+    return names
+
+
 def _args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    opts = {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
-            "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
-            "scenes": list(SCENES)}
-    i = 0
-    while i < len(argv):
-        key, value = argv[i].lstrip("-"), argv[i + 1] if i + 1 < len(argv) else None
-        if value is None or key not in opts:
-            raise ValueError(f"{argv[i]}: expected one of --{', --'.join(opts)} with a value")
-        if key == "size":
-            w, h = value.lower().split("x")
-            opts[key] = (int(w), int(h))
-            if min(opts[key]) < 8:
-                raise ValueError(f"--size {value}: at least 8x8")
-        elif key in ("cycles-samples", "eevee-samples", "rounds"):
-            opts[key] = int(value)
-            if opts[key] < (1 if key == "rounds" else 2):
-                raise ValueError(f"--{key} {value}: too small")
-        elif key == "threshold":
-            opts[key] = float(value)
-        elif key in ("out", "addon"):
-            opts[key] = os.path.abspath(value)
-        else:
-            names = [s for s in value.split(",") if s]
-            unknown = [s for s in names if s not in SCENES]
-            if unknown or not names:
-                raise ValueError(f"--scenes {value}: choose among {','.join(SCENES)}")
-            opts[key] = names
-        i += 2
-    return opts
+    return kit.script_options(
+        {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
+         "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
+         "scenes": list(SCENES)},
+        {"size": _at_least(kit.frame_size, 8, "size"), "cycles-samples": _at_least(int, 2, "cycles-samples"),
+         "eevee-samples": _at_least(int, 2, "eevee-samples"), "rounds": _at_least(int, 1, "rounds"),
+         "threshold": float, "out": os.path.abspath, "addon": os.path.abspath, "scenes": _scene_names})
 
 
 _register_addon = kit.register_addon
