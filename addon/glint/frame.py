@@ -110,14 +110,15 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             back_layer = core.march_details()[kwargs["march"]]["uses_back_position"]
 
         def attempt(size):
-            """G-buffer and trace at ``size`` (None: the frame's); None when no pixel reflects."""
+            """(position, normal, specular, uv, reflective mask) at ``size`` (None: the
+            frame's); None when no pixel reflects."""
             kw = dict(kwargs)
             with timings.measure("rasterize"):
                 gbuf, used = _with_backend(core, backend, requested,
                                            lambda b: rasterize(core, exp, b, back_layer, size))
             progress.check()
             position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-            with timings.measure("images"):  # which pixels reflect: counted, and the trace's input
+            with timings.measure("images"):  # which pixels reflect: counted for the report
                 refl = compositing.reflective_mask(position, specular)
                 report.reflective_pixels = int(np.count_nonzero(refl))
             report.backend = used
@@ -136,7 +137,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
                                          lambda b: core.trace(position, normal, proj32, specular=specular,
                                                               backend=b, **kw))
             report.backend = used
-            return position, normal, specular, uv
+            return position, normal, specular, uv, refl
 
         # A refusal for memory (rasterize, trace, the exact march's mesh) retries
         # with fewer pixels down to a floor before the frame goes without: logic/reduced.py.
@@ -158,7 +159,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
             report.timings_ms = timings.ms
             return report
-        position, normal, specular, uv = traced
+        position, normal, specular, uv, refl = traced
         proj32 = cam.projection.astype(np.float32)
         with timings.measure("images"):
             # Everything the composite needs that does not depend on the frame's
@@ -168,14 +169,13 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             if factor > 1:  # the footprint in frame pixels is `factor` times larger
                 lod[lod > 0] += np.float32(np.log2(factor))
             weight = compositing.weight_image(core.specular_weight(position, normal, specular, proj32), lod)
-            if not compositing.any_rough(specular, uv, lod):
+            if not compositing.any_rough(lod):
                 report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
         if factor > 1:
             with timings.measure("upsample"):
                 # The compositor reads the uv and the weight at the frame's size; the
                 # G-buffer only for a debug view or the layers EXR (else it stays
                 # reduced: fewer frame-size images when memory is short).
-                refl = compositing.reflective_mask(position, specular)
                 stretched = [uv, weight]
                 if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
                     stretched += [position, normal, specular]

@@ -168,7 +168,7 @@ def test_without_rough_surfaces_the_levels_are_switched_off():
                             use_blur=False)
     assert len(calls) == len(cg.BLUR_LEVELS)  # only the first evaluation blurred
     assert np.allclose(on["Image"], off["Image"], atol=1e-6)
-    assert not cg.any_rough(spec, uv, lod) and cg.any_rough(spec, uv, lod + 0.5)
+    assert not cg.any_rough(lod) and cg.any_rough(lod + 0.5)
 
 
 def test_nan_engine_specular_where_nothing_reflects_stays_out_of_the_frame():

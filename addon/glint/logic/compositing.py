@@ -362,12 +362,10 @@ def weight_image(weight: np.ndarray, lod: np.ndarray) -> np.ndarray:
     return out
 
 
-def any_rough(specular: np.ndarray, uv: np.ndarray, lod: Optional[np.ndarray] = None) -> bool:
-    """Whether the blur levels have anything to do: some pixel with a hit has a
-    footprint wider than a pixel (lod > 0)."""
-    if lod is not None:
-        return bool(np.any(lod > 0.0))
-    return bool(np.any((np.asarray(uv)[..., 2] > 0) & (np.asarray(specular)[..., 3] < 1.0)))
+def any_rough(lod: np.ndarray) -> bool:
+    """Whether the blur levels have anything to do: some pixel's reflection cone
+    is wider than a pixel (``cone_lod`` > 0; it is 0 for mirrors and misses)."""
+    return bool(np.any(lod > 0.0))
 
 
 # ----------------------------------------------------------------------------
