@@ -40,11 +40,8 @@ TraceOptions trace_options(float max_distance, float resolution, int steps, floa
   return o;
 }
 
-// An error message as Python text: it may quote bytes of a file that are not
-// UTF-8 (lenient_str).
-pyb::str message_text(const char* what) { return lenient_str(what); }
-
-void set_python_error(PyObject* type, const char* what) { PyErr_SetObject(type, message_text(what).ptr()); }
+// Error messages may quote bytes of a file that are not UTF-8 (lenient_str).
+void set_python_error(PyObject* type, const char* what) { PyErr_SetObject(type, lenient_str(what).ptr()); }
 
 // An optional image argument: None, or an array of the position buffer's size.
 std::optional<Image> optional_image(const pyb::handle& obj, const char* name, const Image& like) {
@@ -210,7 +207,7 @@ PYBIND11_MODULE(glint_core, m) {
       set_python_error(backend_unavailable.ptr(), e.what());
     } catch (const MemoryLimitExceeded& e) {
       // Sizes as attributes, so a caller can work out how far to scale down.
-      pyb::object exc = pyb::handle(memory_limit_exceeded.ptr())(message_text(e.what()));
+      pyb::object exc = pyb::handle(memory_limit_exceeded.ptr())(lenient_str(e.what()));
       exc.attr("needed_bytes") = e.needed_bytes();
       exc.attr("limit_bytes") = e.limit_bytes();
       PyErr_SetObject(memory_limit_exceeded.ptr(), exc.ptr());
