@@ -55,9 +55,6 @@ class GlState {
   // The uniforms hiz_common.glsl declares.
   void bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back);
 
-  // An RG32F texture with every mip level down to 1x1, kept between frames.
-  void pyramid_target(int w, int h);
-
   // `second`, when given, is written at location 1 (level 0, same size).
   void attach_level(GLuint tex, int level, const Texture* second = nullptr);
   // Levels 1..levels-1 of `tex`, each drawn by `reduce` from the level below
@@ -171,8 +168,12 @@ class GlState {
     GLuint id = 0;
     int w = 0, h = 0, levels = 0;
   };
-  Pyramid pyramid_;
+  Pyramid pyramid_;     // RG32F: the hiz march's min/max depth, every level down to 1x1
   Pyramid cone_chain_;  // RGBA32F, every level down to 1x1
+  // (Re)allocate `t` as a `format` texture of w x h with every mip level down
+  // to 1x1, unless it already is one: kept between frames. `stage` and
+  // `images` size the checks and the out-of-memory error; `name` the others.
+  void mip_target(Pyramid& t, int w, int h, GLenum format, const char* stage, int images, const char* name);
   Texture env_brdf_;
   std::map<std::string, GLuint> programs_;
 };

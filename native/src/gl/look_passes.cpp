@@ -51,34 +51,7 @@ Image GlState::specular_weight(const Image& position, const Image& normal, const
 Image GlState::cone_blur(const Image& color, const Image& uv, const Image& specular) {
   const int w = color.width, h = color.height;
   // The chain: an RGBA32F texture with every level, kept between frames.
-  if (!cone_chain_.id || cone_chain_.w != w || cone_chain_.h != h) {
-    if (cone_chain_.id) gl_.DeleteTextures(1, &cone_chain_.id);
-    cone_chain_ = Pyramid{};
-    int levels = 1;
-    for (int lw = w, lh = h; lw > 1 || lh > 1; ++levels) {
-      lw = std::max(1, lw / 2);
-      lh = std::max(1, lh / 2);
-    }
-    check_size(w, h, "cone_blur", 5);
-    while (gl_.GetError() != GL_NO_ERROR) {
-    }
-    gl_.GenTextures(1, &cone_chain_.id);
-    scratch_unit();
-    gl_.BindTexture(GL_TEXTURE_2D, cone_chain_.id);
-    gl_.TexStorage2D(GL_TEXTURE_2D, levels, GL_RGBA32F, w, h);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    const GLenum err = gl_.GetError();
-    if (err != GL_NO_ERROR) {
-      gl_.DeleteTextures(1, &cone_chain_.id);
-      cone_chain_ = Pyramid{};
-      if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, "cone_blur", 5);
-      throw Error(std::string("glint GL: allocating the cone blur's chain failed: ") + gl_error_name(err));
-    }
-    cone_chain_.w = w;
-    cone_chain_.h = h;
-    cone_chain_.levels = levels;
-  }
+  mip_target(cone_chain_, w, h, GL_RGBA32F, "cone_blur", 5, "the cone blur's chain");
   const GLuint chain = cone_chain_.id;
   scratch_unit();
   gl_.BindTexture(GL_TEXTURE_2D, chain);

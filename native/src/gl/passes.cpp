@@ -58,7 +58,7 @@ Image GlState::trace(const TraceInputs& in, const TraceOptions& opt) {
 void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
                    const Texture& nrm, const Texture* back) {
   const int w = in.position.width, h = in.position.height;
-  pyramid_target(w, h);
+  mip_target(pyramid_, w, h, GL_RG32F, "the hiz pyramid", 1, "the hiz pyramid");
   const Texture& planes = target(kPlanes, w, h, "the hiz plane normals", 1);
   // The base level and the plane normals (which the walk reads) in one pass.
   const GLuint base = program("hiz_base.frag");

@@ -30,34 +30,35 @@ GlState::~GlState() {
   gl_.Finish();
 }
 
-void GlState::pyramid_target(int w, int h) {
-  if (pyramid_.id && pyramid_.w == w && pyramid_.h == h) return;
-  if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
-  pyramid_ = Pyramid{};
+void GlState::mip_target(Pyramid& t, int w, int h, GLenum format, const char* stage, int images,
+                         const char* name) {
+  if (t.id && t.w == w && t.h == h) return;
+  if (t.id) gl_.DeleteTextures(1, &t.id);
+  t = Pyramid{};
   int levels = 1;
   for (int lw = w, lh = h; lw > 1 || lh > 1; ++levels) {
     lw = std::max(1, lw / 2);
     lh = std::max(1, lh / 2);
   }
-  check_size(w, h, "the hiz pyramid", 1);
+  check_size(w, h, stage, images);
   while (gl_.GetError() != GL_NO_ERROR) {
   }
-  gl_.GenTextures(1, &pyramid_.id);
+  gl_.GenTextures(1, &t.id);
   scratch_unit();
-  gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
-  gl_.TexStorage2D(GL_TEXTURE_2D, levels, GL_RG32F, w, h);
+  gl_.BindTexture(GL_TEXTURE_2D, t.id);
+  gl_.TexStorage2D(GL_TEXTURE_2D, levels, format, w, h);
   gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
   gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   const GLenum err = gl_.GetError();
   if (err != GL_NO_ERROR) {
-    gl_.DeleteTextures(1, &pyramid_.id);
-    pyramid_ = Pyramid{};
-    if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, "the hiz pyramid", 1);
-    throw Error(std::string("glint GL: allocating the hiz pyramid failed: ") + gl_error_name(err));
+    gl_.DeleteTextures(1, &t.id);
+    t = Pyramid{};
+    if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, stage, images);
+    throw Error(std::string("glint GL: allocating ") + name + " failed: " + gl_error_name(err));
   }
-  pyramid_.w = w;
-  pyramid_.h = h;
-  pyramid_.levels = levels;
+  t.w = w;
+  t.h = h;
+  t.levels = levels;
 }
 
 void GlState::attach_level(GLuint tex, int level, const Texture* second) {
