@@ -27,12 +27,12 @@ pyb::tuple py_read_exr(const pyb::handle& path_obj, double memory_limit_mb) {
   }
   pyb::dict layers;
   int width = 0, height = 0;
-  // Each layer is freed once copied, so the copies add one layer, not all.
+  // Each array takes its layer's pixels over: nothing is copied.
   while (!file.layers.empty()) {
     auto node = file.layers.extract(file.layers.begin());
-    layers[lenient_str(node.key())] = array_from_image(node.mapped());
     width = node.mapped().width;
     height = node.mapped().height;
+    layers[lenient_str(node.key())] = array_from_image(std::move(node.mapped()));
   }
   pyb::dict header;
   header["width"] = width;

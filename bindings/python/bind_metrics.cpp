@@ -43,7 +43,7 @@ void bind_metrics(pyb::module_& m) {
         out["image_mae"] = a.image_mae >= 0.0 ? pyb::cast(a.image_mae) : pyb::none();
         out["image_pixels"] = a.image_pixels;
         out["tolerance_px"] = tolerance_px;
-        out["disagreement"] = array_from_image(a.disagreement);
+        out["disagreement"] = array_from_image(std::move(a.disagreement));
         return out;
       },
       "uv"_a, "exact"_a, pyb::kw_only(), "color"_a = pyb::none(), "specular"_a = pyb::none(),

@@ -79,19 +79,6 @@ std::vector<int32_t> int32_values(const pyb::handle& obj, const char* name, cons
   return out;
 }
 
-// The image's pixels become the array's memory, kept alive by a capsule: at
-// 1920x1080 each G-buffer is 33 MB, and a copy would cost fresh pages
-// (faults, zeroing) plus the copy itself on every frame.
-pyb::array_t<float> array_taking(Image&& img) {
-  auto pixels = std::make_unique<std::vector<float>>(std::move(img.data));
-  float* data = pixels->data();
-  pyb::capsule owner(pixels.get(), [](void* p) { delete static_cast<std::vector<float>*>(p); });
-  pixels.release();  // the capsule owns it now
-  return pyb::array_t<float>({static_cast<pyb::ssize_t>(img.height), static_cast<pyb::ssize_t>(img.width),
-                              static_cast<pyb::ssize_t>(4)},
-                             data, owner);
-}
-
 pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                        const pyb::handle& material_index, const pyb::handle& materials,
                        const pyb::handle& projection, int width, int height, const pyb::handle& uvs,
@@ -173,10 +160,10 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
     g = be->rasterize(in);
   }
   pyb::dict out;
-  out["position"] = array_taking(std::move(g.position));
-  out["normal"] = array_taking(std::move(g.normal));
-  out["specular"] = array_taking(std::move(g.specular));
-  if (back_layer) out["back_position"] = array_taking(std::move(g.back_position));
+  out["position"] = array_from_image(std::move(g.position));
+  out["normal"] = array_from_image(std::move(g.normal));
+  out["specular"] = array_from_image(std::move(g.specular));
+  if (back_layer) out["back_position"] = array_from_image(std::move(g.back_position));
   return out;
 }
 

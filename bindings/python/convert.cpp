@@ -42,7 +42,7 @@ Image image_from_array(const pyb::handle& obj, const char* name, float fill_alph
   // Accept any strides (a transposed or sliced view) by going through a
   // C-contiguous copy only when needed.
   auto contiguous = pyb::array_t<float, pyb::array::c_style | pyb::array::forcecast>::ensure(a);
-  Image img(static_cast<int>(w), static_cast<int>(h));
+  Image img = Image::uninitialized(static_cast<int>(w), static_cast<int>(h));  // every float set below
   const float* src = contiguous.data();
   if (c == 4) {
     std::memcpy(img.data.data(), src, img.data.size() * sizeof(float));
@@ -69,11 +69,15 @@ uint64_t binding_bytes(uint64_t pixels, int images, int outputs) {
   return pixels * 16 * static_cast<uint64_t>(images + 1 + outputs);
 }
 
-pyb::array_t<float> array_from_image(const Image& img) {
-  pyb::array_t<float> out({static_cast<pyb::ssize_t>(img.height), static_cast<pyb::ssize_t>(img.width),
-                           static_cast<pyb::ssize_t>(4)});
-  if (!img.data.empty()) std::memcpy(out.mutable_data(), img.data.data(), img.data.size() * sizeof(float));
-  return out;
+pyb::array_t<float> array_from_image(Image&& img) {
+  // The capsule owns the moved buffer and frees it with the array.
+  auto pixels = std::make_unique<PixelBuffer>(std::move(img.data));
+  float* data = pixels->data();
+  pyb::capsule owner(pixels.get(), [](void* p) { delete static_cast<PixelBuffer*>(p); });
+  pixels.release();
+  return pyb::array_t<float>({static_cast<pyb::ssize_t>(img.height), static_cast<pyb::ssize_t>(img.width),
+                              static_cast<pyb::ssize_t>(4)},
+                             data, owner);
 }
 
 Mat4 projection_from_array(const pyb::handle& obj) {

@@ -83,7 +83,7 @@ pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& nor
     pyb::gil_scoped_release release;
     uv = be->trace(in, opt);
   }
-  return array_from_image(uv);
+  return array_from_image(std::move(uv));
 }
 
 pyb::dict py_marches() {
@@ -169,7 +169,7 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
     res = run_pipeline(*be, in, opt);
   }
   pyb::dict out;
-  for (const auto& name : pipeline_layer_names()) out[name.c_str()] = array_from_image(res.layers.at(name));
+  for (const auto& name : pipeline_layer_names()) out[name.c_str()] = array_from_image(std::move(res.layers.at(name)));
   pyb::dict timings;
   pyb::list skipped;
   for (const auto& t : res.timings) {
@@ -278,7 +278,7 @@ PYBIND11_MODULE(glint_core, m) {
         pyb::gil_scoped_release release;
         Image r = be->reflection_color(u, c);
         pyb::gil_scoped_acquire acquire;
-        return array_from_image(r);
+        return array_from_image(std::move(r));
       },
       "uv"_a, "color"_a, pyb::kw_only(), "backend"_a = "cpu",
       "Colour at the reflected uv (bilinear, clamp to edge), premultiplied by visibility.");
@@ -303,7 +303,7 @@ PYBIND11_MODULE(glint_core, m) {
         pyb::gil_scoped_release release;
         Image r = be->box_blur(src, o, nullptr);
         pyb::gil_scoped_acquire acquire;
-        return array_from_image(r);
+        return array_from_image(std::move(r));
       },
       "image"_a, pyb::kw_only(), "size"_a = 8, "separation"_a = 1.0f, "backend"_a = "cpu",
       "(2 * size + 1)^2 box average of all four channels, taps `separation` pixels apart.");
@@ -320,7 +320,7 @@ PYBIND11_MODULE(glint_core, m) {
         pyb::gil_scoped_release release;
         Image r = be->specular_weight(pos, nrm, spec, proj);
         pyb::gil_scoped_acquire acquire;
-        return array_from_image(r);
+        return array_from_image(std::move(r));
       },
       "position"_a, "normal"_a, "specular"_a, "projection"_a, pyb::kw_only(), "backend"_a = "cpu",
       "Physical reflection weight: rgb = F0 * A + B (split-sum table at N.V and roughness),\n"
@@ -337,7 +337,7 @@ PYBIND11_MODULE(glint_core, m) {
         pyb::gil_scoped_release release;
         Image r = be->cone_blur(c, u, s);
         pyb::gil_scoped_acquire acquire;
-        return array_from_image(r);
+        return array_from_image(std::move(r));
       },
       "reflection_color"_a, "uv"_a, "specular"_a, pyb::kw_only(), "backend"_a = "cpu",
       "The reflection colour blurred by each pixel's GGX cone: footprint 2 * ray length in\n"
@@ -377,7 +377,7 @@ PYBIND11_MODULE(glint_core, m) {
         pyb::gil_scoped_release release;
         Image r = be->reflection(c, b ? &*b : nullptr, s, w ? &*w : nullptr);
         pyb::gil_scoped_acquire acquire;
-        return array_from_image(r);
+        return array_from_image(std::move(r));
       },
       "reflection_color"_a, "reflection_blur"_a, "specular"_a, pyb::kw_only(),
       "weight"_a = pyb::none(), "backend"_a = "cpu",
@@ -398,7 +398,7 @@ PYBIND11_MODULE(glint_core, m) {
         pyb::gil_scoped_release release;
         Image out = be->combine(b, r, c, sb ? &*sb : nullptr, cov ? &*cov : nullptr);
         pyb::gil_scoped_acquire acquire;
-        return array_from_image(out);
+        return array_from_image(std::move(out));
       },
       "color"_a, "reflection"_a, pyb::kw_only(), "mode"_a = "over", "specular_base"_a = pyb::none(),
       "coverage"_a = pyb::none(), "backend"_a = "cpu",

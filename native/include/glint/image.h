@@ -1,9 +1,36 @@
 // The one buffer type every stage reads and writes.
 #pragma once
 #include <cstddef>
+#include <memory>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace glint {
+
+// std::allocator, except that a vector sized without a value leaves its floats
+// uninitialised. An image a stage overwrites whole (a trace's output, a
+// numpy array copied in) then costs its page faults alone, taken by the
+// threads that write it, instead of a serial zeroing pass first: 33 MB per
+// 1920x1080 buffer, a tenth of the hiz trace.
+template <class T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  using std::allocator<T>::allocator;
+  template <class U>
+  void construct(U* p) noexcept(noexcept(::new (static_cast<void*>(p)) U)) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+using PixelBuffer = std::vector<float, DefaultInitAllocator<float>>;
 
 // An RGBA float32 image, pixels stored [row][col][channel], C-contiguous.
 // Row 0 is the BOTTOM row (OpenGL and Blender order), so pixel (x, y) has its
@@ -13,11 +40,20 @@ namespace glint {
 struct Image {
   int width = 0;
   int height = 0;
-  std::vector<float> data;
+  PixelBuffer data;
 
   Image() = default;
   Image(int w, int h, float fill = 0.0f)
       : width(w), height(h), data(static_cast<size_t>(w) * static_cast<size_t>(h) * 4, fill) {}
+
+  // Pixels left unset: only for an image whose every pixel is written next.
+  static Image uninitialized(int w, int h) {
+    Image img;
+    img.width = w;
+    img.height = h;
+    img.data.resize(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+    return img;
+  }
 
   bool empty() const { return width <= 0 || height <= 0; }
   size_t pixel_count() const { return static_cast<size_t>(width) * static_cast<size_t>(height); }

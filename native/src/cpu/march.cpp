@@ -333,14 +333,18 @@ namespace {
 // The seed and the linear march share everything but the per-pixel march.
 template <class PerPixel>
 Image trace_pixels(const TraceInputs& in, const TraceOptions& opt, int threads, PerPixel&& march) {
-  Image out(in.position.width, in.position.height);
+  Image out = Image::uninitialized(in.position.width, in.position.height);  // each march writes its pixel
   const std::vector<float> vd = view_distances(in.position, threads);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, vd.data());
   const Image* spec = in.specular;
   parallel_rows(0, out.height, threads, [&](int y) {
     for (int x = 0; x < out.width; ++x) {
-      if (spec && !is_reflective(spec->px(x, y))) continue;  // the seed returns early here
-      march(setup, x, y, out.px(x, y));
+      float* o = out.px(x, y);
+      if (spec && !is_reflective(spec->px(x, y))) {  // the seed returns early here
+        o[0] = o[1] = o[2] = o[3] = 0.0f;
+        continue;
+      }
+      march(setup, x, y, o);
     }
   });
   return out;

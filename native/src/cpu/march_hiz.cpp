@@ -433,7 +433,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 }
 
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
-  Image out(in.position.width, in.position.height);
+  Image out = Image::uninitialized(in.position.width, in.position.height);  // march_hiz writes each pixel
   const HizCamera cam = hiz_camera(in.projection);
   HizPlanes planes;
   const HizPyramid pyr =
@@ -442,8 +442,12 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   const Image* spec = in.specular;
   parallel_rows(0, out.height, threads, [&](int y) {
     for (int x = 0; x < out.width; ++x) {
-      if (spec && !is_reflective(spec->px(x, y))) continue;
-      march_hiz(setup, planes, pyr, cam, in.back_position, x, y, out.px(x, y));
+      float* o = out.px(x, y);
+      if (spec && !is_reflective(spec->px(x, y))) {
+        o[0] = o[1] = o[2] = o[3] = 0.0f;
+        continue;
+      }
+      march_hiz(setup, planes, pyr, cam, in.back_position, x, y, o);
     }
   });
   return out;

@@ -412,7 +412,7 @@ Image blank_image(int width, int height) {
   const uintptr_t hi = (a + n * sizeof(float)) & ~(kHuge - 1);
   if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
 #endif
-  img.data.resize(n);
+  img.data.resize(n, 0.0f);  // zeroed: the rasterizer writes covered pixels only
   return img;
 }
 

@@ -206,7 +206,7 @@ void GlState::draw(int w, int h) {
 Image GlState::read(int w, int h, GLenum attachment, const char* pass) {
   Image out;
   try {
-    out = Image(w, h);
+    out = Image::uninitialized(w, h);  // ReadPixels fills every pixel, or the error below throws
   } catch (const std::bad_alloc&) {
     throw Error("glint GL: out of host memory: " + size_text(w, h) + " RGBA32F needs " +
                 mib(rgba32f_bytes(w, h)) + " MiB for the result of " + pass);
