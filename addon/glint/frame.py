@@ -110,20 +110,15 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             back_layer = core.march_details()[kwargs["march"]]["uses_back_position"]
 
         def attempt(size):
-            """(position, normal, specular, uv, reflective mask) at ``size`` (None: the
-            frame's); None when no pixel reflects."""
+            """(position, normal, specular, layers) at ``size`` (None: the frame's),
+            layers as ``core.composite_layers`` returns them; None when no pixel reflects."""
             kw = dict(kwargs)
             with timings.measure("rasterize"):
                 gbuf, used = _with_backend(core, backend, requested,
                                            lambda b: rasterize(core, exp, b, back_layer, size))
             progress.check()
             position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-            with timings.measure("images"):  # which pixels reflect: counted for the report
-                refl = compositing.reflective_mask(position, specular)
-                report.reflective_pixels = int(np.count_nonzero(refl))
             report.backend = used
-            if report.reflective_pixels == 0:
-                return None
             if back_layer:
                 kw["back_position"] = gbuf["back_position"]
             kw.update(mesh_kwargs(core, exp, kw["march"]))
@@ -131,13 +126,19 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
                 log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
             proj32 = cam.projection.astype(np.float32)
             with timings.measure("trace"):
-                # The specular buffer skips the pixels that do not reflect; the normals
-                # of what they show stay, for the rays that hit them.
-                uv, used = _with_backend(core, used, requested,
-                                         lambda b: core.trace(position, normal, proj32, specular=specular,
-                                                              backend=b, **kw))
+                # One call for all the composite needs that does not depend on the
+                # frame's colour (the uv image, each pixel's weight and blur level):
+                # the G-buffer crosses into the core once. Pixels that do not
+                # reflect are not traced; the normals of what they show stay, for
+                # the rays that hit them.
+                layers, used = _with_backend(core, used, requested,
+                                             lambda b: core.composite_layers(position, normal, specular, proj32,
+                                                                             backend=b, **kw))
             report.backend = used
-            return position, normal, specular, uv, refl
+            report.reflective_pixels = int(layers["reflective_pixels"])
+            if report.reflective_pixels == 0:
+                return None
+            return position, normal, specular, layers
 
         # A refusal for memory (rasterize, trace, the exact march's mesh) retries
         # with fewer pixels down to a floor before the frame goes without: logic/reduced.py.
@@ -159,23 +160,18 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
             report.timings_ms = timings.ms
             return report
-        position, normal, specular, uv, refl = traced
-        proj32 = cam.projection.astype(np.float32)
-        with timings.measure("images"):
-            # Everything the composite needs that does not depend on the frame's
-            # colour, from the core, at the size traced: each pixel's weight and
-            # blur level.
-            lod = core.cone_lod(uv, specular)
-            if factor > 1:  # the footprint in frame pixels is `factor` times larger
-                lod[lod > 0] += np.float32(np.log2(factor))
-            weight = compositing.weight_image(core.specular_weight(position, normal, specular, proj32), lod)
-            if not compositing.any_rough(lod):
-                report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
+        position, normal, specular, layers = traced
+        uv, weight = layers["uv"], layers["weight"]
+        if not layers["any_rough"]:
+            report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
         if factor > 1:
             with timings.measure("upsample"):
+                lod = weight[..., 3]
+                lod[lod > 0] += np.float32(np.log2(factor))  # the footprint in frame pixels is `factor` times larger
                 # The compositor reads the uv and the weight at the frame's size; the
                 # G-buffer only for a debug view or the layers EXR (else it stays
                 # reduced: fewer frame-size images when memory is short).
+                refl = compositing.reflective_mask(position, specular)
                 stretched = [uv, weight]
                 if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
                     stretched += [position, normal, specular]
@@ -190,7 +186,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             log(f"frame {report.frame}: {note}")
         progress.check()
         with timings.measure("images"):
-            images = {compositing.IMAGE_UV: compositing.uv_image(uv), compositing.IMAGE_WEIGHT: weight}
+            images = {compositing.IMAGE_UV: uv, compositing.IMAGE_WEIGHT: weight}
             view = values["debug_view"]
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)

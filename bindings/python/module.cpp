@@ -9,6 +9,7 @@
 #include "convert.h"
 #include "glint/backend.h"
 #include "glint/brdf.h"
+#include "glint/composite.h"
 #include "glint/errors.h"
 #include "glint/marches.h"
 #include "glint/memory.h"
@@ -51,39 +52,86 @@ std::optional<Image> optional_image(const pyb::handle& obj, const char* name, co
   return img;
 }
 
+// One trace request's arguments, converted and checked: what trace() and
+// composite_layers() share.
+struct TraceCall {
+  Image pos, nrm;
+  Mat4 proj;
+  TraceOptions opt;
+  std::optional<Image> back, spec;
+  std::optional<TriangleMesh> tris;
+  std::shared_ptr<Backend> be;
+  TraceInputs inputs() const {
+    TraceInputs in{pos, nrm, spec ? &*spec : nullptr, proj};
+    in.back_position = back ? &*back : nullptr;
+    in.mesh = tris ? &*tris : nullptr;
+    return in;
+  }
+};
+
+TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::handle& normal,
+                     const pyb::handle& projection, float max_distance, float resolution, int steps,
+                     float thickness, const std::string& march, const pyb::handle& back_position,
+                     const pyb::handle& mesh, const pyb::handle& specular, const std::string& backend,
+                     int threads, double memory_limit_mb, int outputs) {
+  // Before any copy: a 32768x32768 request must be refused with the memory still free.
+  if (auto [w, h] = array_size(position); w > 0) {
+    const uint64_t px = uint64_t(w) * uint64_t(h);
+    const int copies = 2 + (back_position.is_none() ? 0 : 1) + (specular.is_none() ? 0 : 1);
+    require_memory(binding_bytes(px, copies, outputs) +
+                       trace_bytes(w, h, march_info(march).id, backend != "cpu"),
+                   std::string(what) + " at " + std::to_string(w) + "x" + std::to_string(h), memory_limit_mb);
+  }
+  TraceCall c;
+  c.pos = image_from_array(position, "position", 1.0f, 4);
+  c.nrm = image_from_array(normal, "normal", 0.0f, 3);
+  require_same_size(c.pos, "position", c.nrm, "normal");
+  c.proj = projection_from_array(projection);
+  c.opt = trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
+  c.back = optional_image(back_position, "back_position", c.pos);
+  c.spec = optional_image(specular, "specular", c.pos);
+  c.tris = mesh_from_arg(mesh);
+  c.be = get_backend(backend, threads);
+  return c;
+}
+
 pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& normal,
                              const pyb::handle& projection, float max_distance, float resolution,
                              int steps, float thickness, const std::string& march,
                              const pyb::handle& back_position, const pyb::handle& mesh,
                              const pyb::handle& specular, const std::string& backend, int threads,
                              double memory_limit_mb) {
-  // Before any copy: a 32768x32768 request must be refused with the memory still free.
-  if (auto [w, h] = array_size(position); w > 0) {
-    const uint64_t px = uint64_t(w) * uint64_t(h);
-    const int copies = 2 + (back_position.is_none() ? 0 : 1) + (specular.is_none() ? 0 : 1);
-    require_memory(binding_bytes(px, copies, 1) +
-                       trace_bytes(w, h, march_info(march).id, backend != "cpu"),
-                   "trace at " + std::to_string(w) + "x" + std::to_string(h), memory_limit_mb);
-  }
-  const Image pos = image_from_array(position, "position", 1.0f, 4);
-  const Image nrm = image_from_array(normal, "normal", 0.0f, 3);
-  require_same_size(pos, "position", nrm, "normal");
-  const Mat4 proj = projection_from_array(projection);
-  const TraceOptions opt =
-      trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
-  const std::optional<Image> back = optional_image(back_position, "back_position", pos);
-  const std::optional<Image> spec = optional_image(specular, "specular", pos);
-  const std::optional<TriangleMesh> tris = mesh_from_arg(mesh);
-  auto be = get_backend(backend, threads);
-  TraceInputs in{pos, nrm, spec ? &*spec : nullptr, proj};
-  in.back_position = back ? &*back : nullptr;
-  in.mesh = tris ? &*tris : nullptr;
+  const TraceCall c = trace_call("trace", position, normal, projection, max_distance, resolution, steps,
+                                 thickness, march, back_position, mesh, specular, backend, threads,
+                                 memory_limit_mb, 1);
   Image uv;
   {
     pyb::gil_scoped_release release;
-    uv = be->trace(in, opt);
+    uv = c.be->trace(c.inputs(), c.opt);
   }
   return array_from_image(std::move(uv));
+}
+
+pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& normal,
+                              const pyb::handle& specular, const pyb::handle& projection, float max_distance,
+                              float resolution, int steps, float thickness, const std::string& march,
+                              const pyb::handle& back_position, const pyb::handle& mesh,
+                              const std::string& backend, int threads, double memory_limit_mb) {
+  if (specular.is_none()) throw InvalidArgument("specular", "expected a float32 [H, W, 4] array, got None");
+  const TraceCall c = trace_call("composite_layers", position, normal, projection, max_distance, resolution,
+                                 steps, thickness, march, back_position, mesh, specular, backend, threads,
+                                 memory_limit_mb, 2);
+  CompositeLayers layers;
+  {
+    pyb::gil_scoped_release release;
+    layers = composite_layers(*c.be, c.inputs(), c.opt, threads);
+  }
+  pyb::dict out;
+  out["uv"] = array_from_image(std::move(layers.uv));
+  out["weight"] = array_from_image(std::move(layers.weight));
+  out["reflective_pixels"] = layers.reflective_pixels;
+  out["any_rough"] = layers.any_rough;
+  return out;
 }
 
 pyb::dict py_marches() {
@@ -249,6 +297,30 @@ PYBIND11_MODULE(glint_core, m) {
         "serve the rays that hit them.\n"
         "memory_limit_mb: MiB the call may allocate (0: GLINT_MEMORY_LIMIT_MB or half of\n"
         "physical memory); a larger request raises MemoryLimitExceeded (a MemoryError).");
+  m.def("composite_layers", &py_composite_layers, "position"_a, "normal"_a, "specular"_a, "projection"_a,
+        pyb::kw_only(), "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
+        "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "backend"_a = "cpu",
+        "threads"_a = 0, "memory_limit_mb"_a = 0.0,
+        "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
+        "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, 1) from trace(), the uv\n"
+        "of misses within 2 pixels of a hit continued from the hits; 'weight': float32 [H, W, 4], rgb\n"
+        "specular_weight(), a cone_lod(); 'reflective_pixels': pixels traced; 'any_rough': some lod > 0}.\n"
+        "Trace keywords as trace(); nothing is traced when no pixel reflects.");
+  m.def(
+      "continue_missing_uv",
+      [](const pyb::handle& uv, int rings) {
+        if (rings < 0) throw InvalidArgument("rings", "expected 0 or more, got " + std::to_string(rings));
+        Image u = image_from_array(uv, "uv", 0.0f, 4);
+        {
+          pyb::gil_scoped_release release;
+          continue_missing_uv(u, rings);
+        }
+        return array_from_image(std::move(u));
+      },
+      "uv"_a, "rings"_a = 2,
+      "A copy of uv (u, v, vis, _) where `rings` rings of misses (vis <= 0) around the hits take\n"
+      "the mean uv of their hit (or earlier-ring) 3x3 neighbours; vis and the 4th channel unchanged.\n"
+      "What composite_layers() does to its uv image.");
   m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");
   m.def("march_details", &py_march_details,
         "{name: {description, options: {keyword: meaning}, needs_mesh, uses_back_position, gl}}.");

@@ -123,8 +123,18 @@ def np_map_uv(image, uv_rgba):
     return np.where(vis > 0, c, 0).astype(np.float32)
 
 
+def uv_image(uv):
+    """The uv image as glint_core.composite_layers makes it, short of the continued uv of
+    misses (which only Blender's Map UV filter reads): (u, v, vis, 1)."""
+    out = uv.copy()
+    out[..., 3] = 1.0
+    return out
+
+
 def images_of(base, position, spec, uv, weight, lod, debug=None):
-    return {cg.IMAGE_UV: cg.uv_image(uv), cg.IMAGE_WEIGHT: cg.weight_image(weight.copy(), lod),
+    w = weight.copy()
+    w[..., 3] = lod
+    return {cg.IMAGE_UV: uv_image(uv), cg.IMAGE_WEIGHT: w,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
             cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec}
 
@@ -152,7 +162,7 @@ def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
     out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
                             specular_light=light, specular_color=colour)["Image"]
     hit = uv[..., 2] > 0
-    C = np_map_uv(base, cg.uv_image(uv))
+    C = np_map_uv(base, uv_image(uv))
     want = base[..., :3] + C[..., :3] * weight[..., :3] - uv[..., 2:3] * light[..., :3] * colour[..., :3]
     assert np.allclose(out[hit, :3], want[hit], atol=1e-5)
     assert np.array_equal(out[~hit], base[~hit])
@@ -168,7 +178,6 @@ def test_without_rough_surfaces_the_levels_are_switched_off():
                             use_blur=False)
     assert len(calls) == len(cg.BLUR_LEVELS)  # only the first evaluation blurred
     assert np.allclose(on["Image"], off["Image"], atol=1e-6)
-    assert not cg.any_rough(lod) and cg.any_rough(lod + 0.5)
 
 
 def test_nan_engine_specular_where_nothing_reflects_stays_out_of_the_frame():
@@ -225,35 +234,12 @@ def test_group_matches_glint_core_for_a_mirror(core):
     assert np.allclose(out["Image"][ok, :3], want[ok, :3], atol=1e-5)
 
 
-def test_weight_image_carries_the_lod():
-    w = np.full((2, 3, 4), 0.5, np.float32)
-    out = cg.weight_image(w, np.arange(6, dtype=np.float32).reshape(2, 3))
-    assert np.array_equal(out[..., :3], np.full((2, 3, 3), 0.5)) and np.array_equal(out[..., 3].ravel(), range(6))
-
-
-def test_mask_and_uv_images():
+def test_reflective_mask():
     position = np.zeros((1, 4, 4), np.float32)
     position[0, :, 3] = (1, 1, 0, 1)
     position[0, 3, 0] = np.nan
     spec = np.array([[[0.3, 0.6, 0.9, 0.25], [0, 0, 0, 1], [1, 1, 1, 1], [1, 1, 1, 1]]], np.float32)
     assert np.array_equal(cg.reflective_mask(position, spec)[0], (True, False, False, False))
-    uv = np.full((1, 4, 4), 0.5, np.float32)
-    assert np.array_equal(cg.uv_image(uv)[0, 0], (0.5, 0.5, 0.5, 1.0))
-
-
-def test_misses_get_their_neighbours_uv_and_stay_misses():
-    uv = np.zeros((3, 5, 4), np.float32)
-    uv[1, 1] = (0.2, 0.4, 1.0, 1.0)
-    uv[1, 2] = (0.4, 0.6, 0.5, 0.5)
-    out = cg.fill_missing_uv(uv, passes=1)
-    assert np.array_equal(out[..., 2], uv[..., 2])  # visibility untouched
-    assert np.array_equal(out[1, 1], uv[1, 1])  # hits untouched
-    assert np.allclose(out[1, 0, :2], (0.2, 0.4))  # one hit neighbour
-    assert np.allclose(out[0, 1, :2], (0.3, 0.5))  # two hit neighbours: their mean
-    assert np.allclose(out[1, 3, :2], (0.4, 0.6))
-    assert np.array_equal(out[1, 4, :2], (0, 0))  # two rings away: not with one pass
-    assert np.allclose(cg.fill_missing_uv(uv, passes=2)[1, 4, :2], (0.4, 0.6))
-    assert np.array_equal(cg.fill_missing_uv(np.zeros((2, 2, 4), np.float32)), np.zeros((2, 2, 4)))
 
 
 def test_debug_images():

@@ -279,58 +279,6 @@ def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
     return seen
 
 
-def _dilate3(mask: np.ndarray) -> np.ndarray:
-    """Pixels with a True pixel in their 3x3 neighbourhood, separably."""
-    rows = mask.copy()
-    rows[1:] |= mask[:-1]
-    rows[:-1] |= mask[1:]
-    out = rows.copy()
-    out[:, 1:] |= rows[:, :-1]
-    out[:, :-1] |= rows[:, 1:]
-    return out
-
-
-def fill_missing_uv(uv: np.ndarray, passes: int = 2) -> np.ndarray:
-    """Give pixels with no reflection (vis = 0) the mean (u, v) of their hit neighbours.
-
-    Map UV estimates each pixel's uv derivatives from its neighbours and filters
-    (EWA) over that footprint. A miss reports uv (0, 0): beside a hit it makes a
-    huge derivative and the hit's colour is averaged over a large part of the
-    frame. Misses stay misses (vis 0: Map UV returns zero there); only their uv
-    is made continuous. ``passes`` rings of misses around each hit are filled,
-    each ring from the pixels known before it (the hits, then the earlier rings).
-    Only the ring's pixels are gathered: a frame's rings are a small share of it.
-    """
-    out = np.array(uv, dtype=np.float32, copy=True)
-    known = out[..., 2] > 0
-    h, w = known.shape
-    for _ in range(passes):
-        ys, xs = np.nonzero(_dilate3(known) & ~known)
-        if ys.size == 0:
-            break
-        acc = np.zeros((ys.size, 2), np.float32)
-        cnt = np.zeros(ys.size, np.float32)
-        for dy in (-1, 0, 1):
-            yy = ys + dy
-            for dx in (-1, 0, 1):
-                xx = xs + dx
-                inside = (yy >= 0) & (yy < h) & (xx >= 0) & (xx < w)
-                yc, xc = np.clip(yy, 0, h - 1), np.clip(xx, 0, w - 1)
-                k = known[yc, xc] & inside
-                acc += np.where(k[:, None], out[yc, xc, :2], np.float32(0.0))
-                cnt += k
-        out[ys, xs, :2] = acc / cnt[:, None]
-        known[ys, xs] = True
-    return out
-
-
-def uv_image(uv: np.ndarray) -> np.ndarray:
-    """The trace's (u, v, vis, vis) as Map UV's input (u, v, vis, 1), misses' uv filled."""
-    out = fill_missing_uv(uv)
-    out[..., 3] = 1.0
-    return out
-
-
 def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
     """The RGBA picture of a G-buffer layer for the debug view (alpha 1)."""
     h, w = np.asarray(position).shape[:2]
@@ -351,21 +299,6 @@ def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
         raise ValueError(f"debug view: expected one of {GBUFFER_DEBUG_VIEWS}, got {view!r}")
     out[..., 3] = 1.0
     return np.nan_to_num(out, nan=0.0, posinf=0.0, neginf=0.0)
-
-
-
-def weight_image(weight: np.ndarray, lod: np.ndarray) -> np.ndarray:
-    """The weight image: the core's specular weight (rgb) with the cone blur's
-    lod in alpha, in place in ``weight`` (a fresh array from the core)."""
-    out = np.asarray(weight, dtype=np.float32)
-    out[..., 3] = lod
-    return out
-
-
-def any_rough(lod: np.ndarray) -> bool:
-    """Whether the blur levels have anything to do: some pixel's reflection cone
-    is wider than a pixel (``cone_lod`` > 0; it is 0 for mirrors and misses)."""
-    return bool(np.any(lod > 0.0))
 
 
 # ----------------------------------------------------------------------------

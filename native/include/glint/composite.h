@@ -1,0 +1,40 @@
+// What a compositor that samples the reflection colour itself (the Blender
+// add-on's node group) needs from one frame's G-buffer, made in one call so
+// that the G-buffer crosses into the core once per frame (docs/addon.md).
+#pragma once
+#include <cstdint>
+
+#include "glint/image.h"
+#include "glint/options.h"
+#include "glint/stages.h"
+
+namespace glint {
+
+struct CompositeLayers {
+  // (u, v, vis, 1): the trace, with the uv of misses next to hits continued
+  // from those hits (continue_missing_uv), alpha 1.
+  Image uv;
+  // rgb: the split-sum weight (Backend::specular_weight), a: the cone blur's
+  // level (cone_lod_at), 0 for mirrors, misses and pixels that do not reflect.
+  Image weight;
+  // Pixels seen with a positive specular amount: what the trace traced.
+  uint64_t reflective_pixels = 0;
+  // Some pixel's lod is above 0: a blur has work to do.
+  bool any_rough = false;
+};
+
+// Rings of pixels with vis = 0 around the hits (vis > 0), one ring per pass,
+// get the mean uv of their hit (or earlier-ring) 3x3 neighbours; vis stays
+// 0, so they still show nothing. A resampler that estimates each pixel's uv
+// derivatives from its neighbours (Blender's Map UV) would otherwise see the
+// jump from a hit's uv to a miss's (0, 0) and filter a hit over half the
+// frame. Sums in the order dy, dx = -1..1, in float.
+void continue_missing_uv(Image& uv, int rings, int threads = 0);
+
+// Trace on `backend` (specular given: only reflective pixels are traced),
+// then the weight on the same backend and the lod. No trace, weight or lod
+// when nothing reflects (all zero, reflective_pixels 0).
+CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
+                                 int threads = 0);
+
+}  // namespace glint

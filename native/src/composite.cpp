@@ -1,0 +1,92 @@
+// composite_layers() and continue_missing_uv(): the per-frame images of a
+// compositor outside the core (glint/composite.h).
+#include "glint/composite.h"
+
+#include <atomic>
+#include <vector>
+
+#include "glint/errors.h"
+#include "parallel.h"
+
+namespace glint {
+
+void continue_missing_uv(Image& uv, int rings, int threads) {
+  const int w = uv.width, h = uv.height;
+  std::vector<unsigned char> known(uv.pixel_count()), before(uv.pixel_count());
+  parallel_rows(0, h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) known[static_cast<size_t>(y) * w + x] = uv.px(x, y)[2] > 0.0f;
+  });
+  for (int ring = 0; ring < rings; ++ring) {
+    before = known;
+    // A ring pixel reads only pixels known before this ring, which no one
+    // writes during it: rows can run in any order.
+    std::atomic<bool> grew{false};
+    parallel_rows(0, h, threads, [&](int y) {
+      bool any = false;
+      for (int x = 0; x < w; ++x) {
+        if (before[static_cast<size_t>(y) * w + x]) continue;
+        float acc[2] = {0.0f, 0.0f}, count = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy) {
+          const int yy = y + dy;
+          if (yy < 0 || yy >= h) continue;
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = x + dx;
+            if (xx < 0 || xx >= w || !before[static_cast<size_t>(yy) * w + xx]) continue;
+            const float* q = uv.px(xx, yy);
+            acc[0] += q[0];
+            acc[1] += q[1];
+            count += 1.0f;
+          }
+        }
+        if (count == 0.0f) continue;
+        float* o = uv.px(x, y);
+        o[0] = acc[0] / count;
+        o[1] = acc[1] / count;
+        known[static_cast<size_t>(y) * w + x] = 1;
+        any = true;
+      }
+      if (any) grew.store(true, std::memory_order_relaxed);
+    });
+    if (!grew.load()) break;
+  }
+}
+
+CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
+                                 int threads) {
+  require_trace_inputs(in, opt);
+  if (!in.specular) throw InvalidArgument("specular", "composite_layers needs the specular buffer");
+  const Image& spec = *in.specular;
+  CompositeLayers out;
+  std::atomic<uint64_t> reflective{0};
+  parallel_rows(0, spec.height, threads, [&](int y) {
+    uint64_t n = 0;
+    for (int x = 0; x < spec.width; ++x) n += texel_seen(in.position.px(x, y)) && is_reflective(spec.px(x, y));
+    reflective.fetch_add(n, std::memory_order_relaxed);
+  });
+  out.reflective_pixels = reflective.load();
+  if (out.reflective_pixels == 0) {
+    out.uv = Image(spec.width, spec.height);
+    out.weight = Image(spec.width, spec.height);
+    return out;
+  }
+  out.uv = backend.trace(in, opt);
+  out.weight = backend.specular_weight(in.position, in.normal, spec, in.projection);
+  std::atomic<bool> rough{false};
+  // The lod from the trace's own uv, before its misses are continued.
+  parallel_rows(0, spec.height, threads, [&](int y) {
+    bool any = false;
+    for (int x = 0; x < spec.width; ++x) {
+      const float* s = spec.px(x, y);
+      const float lod = is_reflective(s) ? cone_lod_at(x, y, spec.width, spec.height, out.uv.px(x, y), s) : 0.0f;
+      out.weight.px(x, y)[3] = lod;
+      any = any || lod > 0.0f;
+    }
+    if (any) rough.store(true, std::memory_order_relaxed);
+  });
+  out.any_rough = rough.load();
+  continue_missing_uv(out.uv, 2, threads);
+  for (size_t i = 0; i < out.uv.pixel_count(); ++i) out.uv.data[i * 4 + 3] = 1.0f;
+  return out;
+}
+
+}  // namespace glint
