@@ -6,8 +6,8 @@ add-on calls, so the shipped code pays nothing for it. docs/hardening.md.
 - ``lose_gl_context_after_rasterize(shim)``: the G-buffer is drawn on the GL
   backend, then the context is lost (fault_egl.c, loaded by the core through
   GLINT_EGL_LIBRARY) and the trace's read-back fails inside the core.
-- ``core_error_in_trace()``: the core's trace raises RuntimeError, as a
-  ``glint::Error`` reaches Python.
+- ``core_error_in_trace()``: the core's trace (the add-on calls it as
+  ``composite_layers``) raises RuntimeError, as a ``glint::Error`` reaches Python.
 - ``cancel_after_checks(n)``: the render's cancel flag reads as set from its n-th
   look on (the export asks once per object): a cancel in the middle of the export.
 - ``cancel_during_trace()``: the user cancels while the trace runs.
@@ -58,7 +58,7 @@ def core_error_in_trace():
         def trace(*args, **kwargs):
             raise RuntimeError("glint: injected core failure in trace")
         return trace
-    _replace_core(trace=make)
+    _replace_core(composite_layers=make)
 
 
 def cancel_during_trace():
@@ -68,7 +68,7 @@ def cancel_during_trace():
             STATE.cancel.set()  # what GLINT_OT_cancel does, while the trace ran
             return out
         return trace
-    _replace_core(trace=make)
+    _replace_core(composite_layers=make)
 
 
 class _TripAfter(threading.Event):
