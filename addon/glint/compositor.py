@@ -400,7 +400,7 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
             if tuple(rgb.outputs[0].default_value) != (0.0, 0.0, 0.0, 1.0):
                 rgb.outputs[0].default_value = (0.0, 0.0, 0.0, 1.0)
             return
-    source, colour = world_logic.specular_source(describe_world(scene.world)) if eevee else \
+    source, colour = world_logic.specular_source(describe_world(scene.world), scene.eevee.use_ssr) if eevee else \
         (world_logic.SOURCE_PASSES, None)
     if source == world_logic.SOURCE_WORLD:
         rgb = tree.nodes.get(cg.WORLD_COLOUR_NODE)

@@ -40,6 +40,12 @@ def test_anything_linked_needs_the_passes(surface):
     assert world.specular_source(surface) == (world.SOURCE_PASSES, None)
 
 
+def test_eevee_ssr_needs_the_passes_even_under_a_uniform_world():
+    # its reflections stand in the frame where the world's specular would be
+    assert world.specular_source(None, engine_ssr=True) == (world.SOURCE_PASSES, None)
+    assert world.specular_source(background(), engine_ssr=True) == (world.SOURCE_PASSES, None)
+
+
 def test_bad_description_names_the_argument():
     with pytest.raises(ValueError, match="world"):
         world.specular_source("sky")

@@ -76,3 +76,12 @@ def test_a_world_with_a_texture_keeps_the_passes(blender, samples, session_dir):
     layers = read_exr(os.path.join(out, "frame_glint_0001.exr"), layer=None)
     refl = load_dump(out)["uv"][..., 2] > 0
     assert layers["EngineSpecular"][..., :3][refl].max() > 0, "the passes did not reach the group"
+
+
+def test_eevee_ssr_keeps_the_passes_under_a_uniform_world(blender, samples, session_dir):
+    # Eevee's own SSR replaces the world's specular in the frame: only the passes hold it
+    out, log, flags = render(blender, samples, session_dir, "world_ssr",
+                             REPORT + "bpy.context.scene.eevee.use_ssr = True\n")
+    assert flags == ["True", "True"]
+    assert "comes from the Eevee passes" in log
+    assert "Glint: frame 1: reflections composited" in log

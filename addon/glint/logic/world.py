@@ -36,9 +36,14 @@ def _rgb(value, name: str) -> Tuple[float, float, float]:
     return rgb
 
 
-def specular_source(world: Optional[dict]) -> Tuple[str, Optional[Tuple[float, float, float]]]:
+def specular_source(world: Optional[dict], engine_ssr: bool = False
+                    ) -> Tuple[str, Optional[Tuple[float, float, float]]]:
     """(SOURCE_WORLD, (r, g, b)) when the world is one colour, the radiance
-    every direction sees; (SOURCE_PASSES, None) when S must come from the passes."""
+    every direction sees; (SOURCE_PASSES, None) when S must come from the passes:
+    a world that is not uniform, or Eevee's own SSR on (``engine_ssr``), whose
+    reflections are in the frame in place of the world's and only the passes hold."""
+    if engine_ssr:
+        return SOURCE_PASSES, None
     if world is None:
         return SOURCE_WORLD, (0.0, 0.0, 0.0)
     if not isinstance(world, dict) or "use_nodes" not in world:
