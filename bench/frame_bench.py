@@ -167,4 +167,5 @@ def main():
     print(f"  Glint's stages in all     {sum(st.values()) + clear:8.1f} ms")
 
 
-main()
+if __name__ == "__main__":  # bench/world_specular_bench.py imports build_scene
+    main()

@@ -17,6 +17,8 @@ import numpy as np
 
 from . import gather
 from .logic import compositing as cg
+from .logic import world as world_logic
+from .state import STATE
 
 LAYOUT_KEY = "glint_layout"
 
@@ -347,26 +349,104 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     return f"turned on {' and '.join(turned_on)} so that its reflections reach the frame"
 
 
+def describe_world(world) -> Optional[dict]:
+    """The plain description of a world that :func:`world_logic.specular_source` reads."""
+    if world is None:
+        return None
+    if not world.use_nodes or world.node_tree is None:
+        return {"use_nodes": False, "color": tuple(world.color)}
+    outputs = [n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"]
+    # Eevee renders the active output (is_active_output), targets ALL or EEVEE.
+    active = [n for n in outputs if n.is_active_output and n.target in ("ALL", "EEVEE")] or outputs
+    if not active:
+        return {"use_nodes": True, "surface": None}
+    links = active[0].inputs["Surface"].links
+    if not links:
+        return {"use_nodes": True, "surface": None}
+    node = links[0].from_node
+    if node.bl_idname != "ShaderNodeBackground":
+        return {"use_nodes": True, "surface": {"kind": node.bl_idname, "color": None, "strength": None}}
+    colour, strength = node.inputs["Color"], node.inputs["Strength"]
+    return {"use_nodes": True, "surface": {
+        "kind": node.bl_idname,
+        "color": None if colour.is_linked else tuple(colour.default_value),
+        "strength": None if strength.is_linked else float(strength.default_value)}}
+
+
+def _link_once(tree, from_socket, to_socket, change, what: str) -> None:
+    if not any(l.from_socket == from_socket for l in to_socket.links):
+        change(what)
+        for link in list(to_socket.links):
+            tree.links.remove(link)
+        tree.links.new(from_socket, to_socket)
+
+
 def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on) -> None:
-    """Feed the group the engine's own specular (what a found reflection
-    replaces): Eevee's Specular Light and Specular Color. The links are made for
-    every engine; an engine that does not write the passes leaves the sockets
-    unavailable and the group's inputs at black (nothing replaced)."""
-    for output, group_input, _ in cg.ENGINE_PASSES:
-        if output not in rl.outputs:
-            continue
-        if not any(l.from_node == rl and l.from_socket.name == output for l in gnode.inputs[group_input].links):
-            change(f"the engine's {group_input} pass is not linked to the Glint node")
-            tree.links.new(rl.outputs[output], gnode.inputs[group_input])
-    if scene.render.engine == "BLENDER_EEVEE":
-        off = [flag for _, _, flag in cg.ENGINE_PASSES if not getattr(view_layer, flag)]
-        if off:
-            # Values, not structure: written even from the render thread, which
-            # copies the view layers after render_init.
-            for flag in off:
-                setattr(view_layer, flag, True)
-            scene.glint.owns_specular_passes = True
-            turned_on.append("Eevee's Specular Light and Specular Color passes (what a reflection replaces)")
+    """Feed the group the engine's own specular S (what a found reflection
+    replaces). Eevee under a uniform world: the world colour (an RGB node) times
+    the weight image W, no render pass (logic/world.py). Otherwise Eevee's
+    Specular Light and Specular Color passes; an engine that does not write them
+    leaves the sockets unavailable and the group's inputs at black (nothing
+    replaced). Records the source in ``STATE.specular_source``."""
+    eevee = scene.render.engine == "BLENDER_EEVEE"
+    light_in, colour_in = (group_input for _, group_input, _ in cg.ENGINE_PASSES)
+    STATE.specular_source = None
+    if not eevee:
+        rgb = tree.nodes.get(cg.WORLD_COLOUR_NODE)
+        if rgb is not None and any(l.from_node == rgb for l in gnode.inputs[light_in].links):
+            # Set up under Eevee: a black colour makes S = 0 (the engine has no
+            # world specular to replace) with no change of structure, which a
+            # render thread may not make.
+            if tuple(rgb.outputs[0].default_value) != (0.0, 0.0, 0.0, 1.0):
+                rgb.outputs[0].default_value = (0.0, 0.0, 0.0, 1.0)
+            return
+    source, colour = world_logic.specular_source(describe_world(scene.world), scene.eevee.use_ssr) if eevee else \
+        (world_logic.SOURCE_PASSES, None)
+    if source == world_logic.SOURCE_WORLD:
+        rgb = tree.nodes.get(cg.WORLD_COLOUR_NODE)
+        if rgb is None or rgb.bl_idname != "CompositorNodeRGB":
+            change("the world colour node is missing")
+            rgb = tree.nodes.new("CompositorNodeRGB")
+            rgb.name = rgb.label = cg.WORLD_COLOUR_NODE
+            rgb.location = (gnode.location.x - 300, gnode.location.y - 250)
+        value = (*colour, 1.0)
+        if tuple(rgb.outputs[0].default_value) != value:  # a value: written from the render thread too
+            rgb.outputs[0].default_value = value
+        weight = tree.nodes.get(cg.WORLD_WEIGHT_NODE)
+        if weight is None or weight.bl_idname != "CompositorNodeImage":
+            change("the world weight node is missing")
+            weight = tree.nodes.new("CompositorNodeImage")
+            weight.name = weight.label = cg.WORLD_WEIGHT_NODE
+            weight.location = (gnode.location.x - 300, gnode.location.y - 450)
+        if weight.image is None or weight.image.name != cg.IMAGE_WEIGHT:
+            change("the world weight node lost its image")
+            weight.image = ensure_image(cg.IMAGE_WEIGHT)
+        _link_once(tree, rgb.outputs[0], gnode.inputs[light_in], change, "S is not fed by the world colour")
+        _link_once(tree, weight.outputs[0], gnode.inputs[colour_in], change, "S is not fed by the weight image")
+        if scene.glint.owns_specular_passes:
+            # Values: written even from the render thread, which copies the
+            # view layers after render_init.
+            for _, _, flag in cg.ENGINE_PASSES:
+                setattr(view_layer, flag, False)
+            scene.glint.owns_specular_passes = False
+    else:
+        for name in (cg.WORLD_COLOUR_NODE, cg.WORLD_WEIGHT_NODE):
+            if tree.nodes.get(name) is not None:
+                change("the world colour nodes are no longer wanted")
+                tree.nodes.remove(tree.nodes[name])
+        for output, group_input, _ in cg.ENGINE_PASSES:
+            if output in rl.outputs:
+                _link_once(tree, rl.outputs[output], gnode.inputs[group_input], change,
+                           f"the engine's {group_input} pass is not linked to the Glint node")
+        if eevee:
+            off = [flag for _, _, flag in cg.ENGINE_PASSES if not getattr(view_layer, flag)]
+            if off:
+                for flag in off:
+                    setattr(view_layer, flag, True)
+                scene.glint.owns_specular_passes = True
+                turned_on.append("Eevee's Specular Light and Specular Color passes (what a reflection replaces)")
+    if eevee:
+        STATE.specular_source = source
 
 
 def turned_on_notice(scene) -> Optional[str]:
@@ -423,9 +503,10 @@ def remove(scene) -> None:
             if sources:
                 for t in targets:
                     tree.links.new(sources[0], t)
-        exr = tree.nodes.get(cg.EXR_NODE_NAME)
-        if exr is not None:
-            tree.nodes.remove(exr)
+        for name in (cg.EXR_NODE_NAME, cg.WORLD_COLOUR_NODE, cg.WORLD_WEIGHT_NODE):
+            node = tree.nodes.get(name)
+            if node is not None:
+                tree.nodes.remove(node)
         if glint.owns_use_nodes and _is_default_tree(tree):
             scene.use_nodes = False
     if glint.owns_use_compositing:

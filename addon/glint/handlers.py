@@ -91,6 +91,8 @@ def on_render_init(scene, *args):
         return
     if turned_on:  # an old file's compositor was off: say what changed, render with reflections
         log(f"scene {scene.name!r}: {turned_on}")
+    if STATE.specular_source:
+        log(f"the specular a reflection replaces comes from the {STATE.specular_source}")
 
 
 def _skip(scene, reason: str) -> None:

@@ -49,6 +49,9 @@ class _State:
         self.arrays: Dict[str, object] = {}
         # The last "Measure this scene" figures (logic/measurement.py), for the panel.
         self.measurement: Dict[str, object] = {}
+        # Where the last render's engine specular S came from (logic/world.py:
+        # "world colour" or "Eevee passes"), None for other engines.
+        self.specular_source: Optional[str] = None
 
     def log(self, message: str) -> str:
         line = f"{PREFIX} {message}"

@@ -40,6 +40,8 @@ class GLINT_PT_render(bpy.types.Panel):
             notice = compositor.turned_on_notice(context.scene)
             if notice:
                 layout.label(text=f"{notice} for its reflections", icon="INFO")
+            if STATE.specular_source:
+                layout.label(text=f"Replaced specular from the {STATE.specular_source}", icon="WORLD")
             if not context.scene.render.use_compositing:
                 layout.label(text="Compositing is off: Glint turns it on when rendering", icon="INFO")
         last = STATE.last

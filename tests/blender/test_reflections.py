@@ -75,8 +75,8 @@ def test_reflections_appear_nowhere_else(mirror_on, mirror_off):
 
 def test_blender_composite_against_core_combine(mirror_on):
     """The figure the issue asks for: Blender's composite vs glint_core's combine
-    of the same base image, G-buffer and engine specular (Eevee's Specular Light x
-    Color, from the layers EXR). The sample's floor is a mirror, so there is no
+    of the same base image, G-buffer and engine specular S (the sample's uniform
+    world: its colour x W, from the layers EXR). The sample's floor is a mirror, so there is no
     blur; Map UV's EWA filter is the one difference. The core clamps base - S x
     coverage at 0 and the group does not: pixels where that clamp acts are left out."""
     out_dir, _ = mirror_on
@@ -97,7 +97,9 @@ def test_blender_composite_against_core_combine(mirror_on):
     diff = np.abs(res["combined"][..., :3] - layers["Image"][..., :3])[unclamped]
     print(f"\nBlender composite vs core combine: max {diff.max():.4f}, mean {diff.mean():.6f}, "
           f"99th percentile {np.percentile(diff, 99):.4f}, {int((~unclamped).sum())} clamped pixels left out")
-    assert unclamped[refl].mean() > 0.95
+    # S is the world's colour x W here (a uniform world): it exceeds what Eevee's
+    # probe gave the frame on about a tenth of the hits (docs/addon.md)
+    assert unclamped[refl].mean() > 0.85
     assert diff.mean() < 2e-3
     assert np.percentile(diff, 99) < 0.05
     # on pixels that do not reflect, both are the base image, exactly

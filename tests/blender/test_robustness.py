@@ -127,6 +127,12 @@ s.glint.steps = 7
 res['preset_after_edit'] = s.glint.preset
 s.glint.enabled = True  # again: nothing may be duplicated
 res['nodes_on'] = sorted(n.name for n in t.nodes)
+# A world that is not one colour: S from Eevee's passes, which Glint turns on
+w = s.world.node_tree
+w.links.new(w.nodes.new('ShaderNodeTexGradient').outputs['Color'], w.nodes['Background'].inputs['Color'])
+s.glint.enabled = True
+res['textured_on'] = {'links': links(t), 'nodes': sorted(n.name for n in t.nodes),
+                      'passes': [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]}
 s.glint.enabled = False
 res['user_off'] = links(t)
 res['nodes_off'] = sorted(n.name for n in t.nodes)
@@ -141,25 +147,33 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     log = blender.run(["--addons", "glint", "--python-expr", SETUP_CHECK])
     res = json.loads(next(line[5:] for line in log.splitlines() if line.startswith("SETUP")))
     assert res["plain_on"]["use_nodes"] is True
+    # The factory scene's world is one colour: S = that colour (an RGB node) x the weight image
+    world = ["Glint World Colour:RGBA->Glint:Specular Light", "Glint World Weight:Image->Glint:Specular Color"]
     passes = ["Render Layers:GlossCol->Glint:Specular Color", "Render Layers:GlossDir->Glint:Specular Light"]
     assert res["plain_on"]["links"] == sorted(["Glint:Image->Composite:Image", "Render Layers:Image->Glint:Image"]
-                                              + passes)
+                                              + world)
     assert res["plain_off"] == {"use_nodes": False, "group": False, "images": []}
     assert res["user_on"] == sorted(["Render Layers:Image->Glint:Image", "Glint:Image->User Glare:Image",
                                      "User Glare:Image->Composite:Image", "Glint:Image->User Viewer:Image"] +
-                                    passes + ["Glint:Engine Specular->Glint EXR:EngineSpecular"] +
+                                    world + ["Glint:Engine Specular->Glint EXR:EngineSpecular"] +
                                     [f"Glint:{name}->Glint EXR:{name}" for name in
                                      ("Image", "Base", "Reflection", "Position", "Normal", "Specular", "UV",
                                       "Visibility")])
     assert res["exr_node"] is True
-    # Eevee's Specular Light and Color passes: on while Glint is, off again after
-    assert res["passes"] == [True, True] and res["passes_off"] == [False, False]
+    # Eevee's Specular Light and Color passes: not needed under a uniform world; on
+    # under a textured one (in place of the world nodes), off again after
+    assert res["passes"] == [False, False]
+    assert res["textured_on"]["passes"] == [True, True] and res["passes_off"] == [False, False]
+    assert sorted(set(res["textured_on"]["links"]) - set(res["user_on"])) == passes
+    assert sorted(set(res["user_on"]) - set(res["textured_on"]["links"])) == world
+    assert res["textured_on"]["nodes"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer",
+                                                  "Glint", "Glint EXR"])
     assert res["switch"] == [True, False]
     high = res["core_high"]  # the add-on's presets are the core's
     assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"]]
     assert res["preset_after_edit"] == "CUSTOM"
     assert res["nodes_on"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer", "Glint",
-                                      "Glint EXR"])
+                                      "Glint EXR", "Glint World Colour", "Glint World Weight"])
     assert res["user_off"] == res["user_before"]
     assert res["nodes_off"] == ["Composite", "Render Layers", "User Glare", "User Viewer"]
     assert res["use_nodes_off"] is True and res["group_off"] is False

@@ -27,7 +27,9 @@ and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
 
 Replace, not add: where the trace found the reflection (vis 1) the engine's
 specular of the world is taken out and the reflection put in; where it found
-nothing (vis 0), D = 0 and the pixel is exactly the engine's. Engines without
+nothing (vis 0), D = 0 and the pixel is exactly the engine's. Under Eevee and
+a uniform world the group's two inputs are the world's colour and the weight
+image instead of the passes (S = colour x W, logic/world.py). Engines without
 those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
 
@@ -75,6 +77,11 @@ TRUE_REFLECTION_NOTE = ("Cycles traces true reflections: the frame is left as Cy
 GROUP_NAME = "Glint"
 GROUP_NODE_NAME = "Glint"  # the group node in the scene's compositor tree
 EXR_NODE_NAME = "Glint EXR"
+# Beside the group, for Eevee under a uniform world (logic/world.py): S = the
+# world's colour (an RGB node into Specular Light) x W (the weight image into
+# Specular Color), instead of Eevee's passes.
+WORLD_COLOUR_NODE = "Glint World Colour"
+WORLD_WEIGHT_NODE = "Glint World Weight"
 
 GROUP_INPUTS = (
     ("Image", "NodeSocketColor"),
