@@ -381,6 +381,17 @@ def _link_once(tree, from_socket, to_socket, change, what: str) -> None:
         tree.links.new(from_socket, to_socket)
 
 
+def _ensure_node(tree, name: str, idname: str, location, change, missing: str):
+    """The node called ``name`` of type ``idname``, made (and ``change`` told why) if absent."""
+    node = tree.nodes.get(name)
+    if node is None or node.bl_idname != idname:
+        change(missing)
+        node = tree.nodes.new(idname)
+        node.name = node.label = name
+        node.location = location
+    return node
+
+
 def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on) -> None:
     """Feed the group the engine's own specular S (what a found reflection
     replaces). Eevee under a uniform world: the world colour (an RGB node) times
@@ -403,21 +414,15 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
     source, colour = world_logic.specular_source(describe_world(scene.world), scene.eevee.use_ssr) if eevee else \
         (world_logic.SOURCE_PASSES, None)
     if source == world_logic.SOURCE_WORLD:
-        rgb = tree.nodes.get(cg.WORLD_COLOUR_NODE)
-        if rgb is None or rgb.bl_idname != "CompositorNodeRGB":
-            change("the world colour node is missing")
-            rgb = tree.nodes.new("CompositorNodeRGB")
-            rgb.name = rgb.label = cg.WORLD_COLOUR_NODE
-            rgb.location = (gnode.location.x - 300, gnode.location.y - 250)
+        rgb = _ensure_node(tree, cg.WORLD_COLOUR_NODE, "CompositorNodeRGB", (gnode.location.x - 300,
+                                                                             gnode.location.y - 250),
+                           change, "the world colour node is missing")
         value = (*colour, 1.0)
         if tuple(rgb.outputs[0].default_value) != value:  # a value: written from the render thread too
             rgb.outputs[0].default_value = value
-        weight = tree.nodes.get(cg.WORLD_WEIGHT_NODE)
-        if weight is None or weight.bl_idname != "CompositorNodeImage":
-            change("the world weight node is missing")
-            weight = tree.nodes.new("CompositorNodeImage")
-            weight.name = weight.label = cg.WORLD_WEIGHT_NODE
-            weight.location = (gnode.location.x - 300, gnode.location.y - 450)
+        weight = _ensure_node(tree, cg.WORLD_WEIGHT_NODE, "CompositorNodeImage", (gnode.location.x - 300,
+                                                                                 gnode.location.y - 450),
+                              change, "the world weight node is missing")
         if weight.image is None or weight.image.name != cg.IMAGE_WEIGHT:
             change("the world weight node lost its image")
             weight.image = ensure_image(cg.IMAGE_WEIGHT)
