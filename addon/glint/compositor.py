@@ -392,6 +392,14 @@ def _ensure_node(tree, name: str, idname: str, location, change, missing: str):
     return node
 
 
+def _release_specular_passes(scene, view_layer) -> None:
+    """Turn Eevee's Specular Light and Color passes off again if Glint turned them on."""
+    if scene.glint.owns_specular_passes:
+        for _, _, flag in cg.ENGINE_PASSES:
+            setattr(view_layer, flag, False)
+        scene.glint.owns_specular_passes = False
+
+
 def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on) -> None:
     """Feed the group the engine's own specular S (what a found reflection
     replaces). Eevee under a uniform world: the world colour (an RGB node) times
@@ -428,12 +436,9 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
             weight.image = ensure_image(cg.IMAGE_WEIGHT)
         _link_once(tree, rgb.outputs[0], gnode.inputs[light_in], change, "S is not fed by the world colour")
         _link_once(tree, weight.outputs[0], gnode.inputs[colour_in], change, "S is not fed by the weight image")
-        if scene.glint.owns_specular_passes:
-            # Values: written even from the render thread, which copies the
-            # view layers after render_init.
-            for _, _, flag in cg.ENGINE_PASSES:
-                setattr(view_layer, flag, False)
-            scene.glint.owns_specular_passes = False
+        # Values: written even from the render thread, which copies the view
+        # layers after render_init.
+        _release_specular_passes(scene, view_layer)
     else:
         for name in (cg.WORLD_COLOUR_NODE, cg.WORLD_WEIGHT_NODE):
             if tree.nodes.get(name) is not None:
@@ -516,11 +521,8 @@ def remove(scene) -> None:
             scene.use_nodes = False
     if glint.owns_use_compositing:
         scene.render.use_compositing = False
-    if glint.owns_specular_passes:
-        view_layer = target_view_layer(scene)
-        for _, _, flag in cg.ENGINE_PASSES:
-            setattr(view_layer, flag, False)
-    glint.owns_use_nodes = glint.owns_use_compositing = glint.owns_specular_passes = False
+    _release_specular_passes(scene, target_view_layer(scene))
+    glint.owns_use_nodes = glint.owns_use_compositing = False
     still_used = any(s.glint.enabled and s != scene for s in bpy.data.scenes)
     if not still_used:
         group = find_group()
