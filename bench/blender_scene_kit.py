@@ -1,5 +1,5 @@
-"""What the benches that run inside Blender share (bench/frame_bench.py,
-bench/look_compare.py): their options after Blender's "--", registering the
+"""What the scripts that build scenes inside Blender share (bench/frame_bench.py,
+bench/look_compare.py, blend_samples/make_samples.py): their options after Blender's "--", registering the
 add-on from a folder, and a Principled material from a few values. Importable
 only under Blender (bpy)."""
 from __future__ import annotations
@@ -42,12 +42,20 @@ def register_addon(parent):
     return glint
 
 
-def principled(name, colour, roughness, specular=0.5, metallic=0.0):
+def principled(name, colour, roughness=0.5, specular=0.5, metallic=0.0):
+    """A Principled material; Specular 0 on a dielectric means "not reflective" to Glint.
+    The viewport's colour, metallic and roughness follow (Workbench's material colour)."""
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     p = mat.node_tree.nodes["Principled BSDF"]
     p.inputs["Base Color"].default_value = (*colour, 1.0)
     p.inputs["Roughness"].default_value = roughness
     p.inputs["Metallic"].default_value = metallic
-    p.inputs["Specular"].default_value = specular
+    if "Specular" in p.inputs:  # 3.x
+        p.inputs["Specular"].default_value = specular
+    else:  # 4.x: the same F0 through "Specular IOR Level" at IOR 1.5
+        p.inputs["Specular IOR Level"].default_value = specular
+    mat.diffuse_color = (*colour, 1.0)
+    mat.metallic = metallic
+    mat.roughness = roughness
     return mat

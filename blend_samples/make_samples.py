@@ -25,6 +25,8 @@ import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ADDON_PARENT = os.path.join(os.path.dirname(HERE), "addon")
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "bench"))
+from blender_scene_kit import principled  # noqa: E402  (bench/, shared with the Blender benches)
 
 
 def _args():
@@ -104,24 +106,6 @@ def new_scene(name, engine, size):
 def link(scene, ob):
     scene.collection.objects.link(ob)
     return ob
-
-
-def principled(name, base, metallic=0.0, roughness=0.5, specular=0.5):
-    """A Principled material; Specular 0 on a dielectric means "not reflective" to Glint."""
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    p = mat.node_tree.nodes["Principled BSDF"]
-    p.inputs["Base Color"].default_value = (*base, 1.0)
-    p.inputs["Metallic"].default_value = metallic
-    p.inputs["Roughness"].default_value = roughness
-    if "Specular" in p.inputs:  # 3.x
-        p.inputs["Specular"].default_value = specular
-    else:  # 4.x: the same F0 through "Specular IOR Level" at IOR 1.5
-        p.inputs["Specular IOR Level"].default_value = specular
-    mat.diffuse_color = (*base, 1.0)
-    mat.metallic = metallic
-    mat.roughness = roughness
-    return mat
 
 
 def diffuse(name, base):
