@@ -10,7 +10,8 @@ Blender process, alternating per round:
 
 and prints the median of each: Blender's wall time for the render, what SSR and Glint
 add to it (against plain), Glint's stages from its log (export/gather, rasterize,
-trace, images), its render_pre clear of the full-size images (timed after the
+trace, images; also those of the warm-up frame, which pays for fresh memory and
+contexts that later frames reuse), its render_pre clear of the full-size images (timed after the
 frame, as the next frame pays it), and the compositor's share (what Glint adds
 minus its stages and clear). Usage, from a checkout after building:
 
@@ -129,6 +130,7 @@ def main():
         clear_ms.append((time.perf_counter() - t0) * 1e3)
     walls = {"plain": [], "ssr": [], "glint": []}
     stages = {}
+    first = {}  # the warm-up round's Glint stages: the process's first frame
     backends = set()
     modes = list(walls)
     for k in range(opts["rounds"] + 1):  # round 0 warms up (shaders, GL context, caches)
@@ -138,6 +140,8 @@ def main():
             bpy.ops.render.render(write_still=False)
             wall = (time.perf_counter() - t0) * 1e3
             if k == 0:
+                if mode == "glint" and STATE.last is not None:
+                    first = dict(STATE.last.timings_ms)
                 continue
             walls[mode].append(wall)
             if mode == "glint":
@@ -165,6 +169,11 @@ def main():
     rest = added - sum(st.values())
     print(f"    {'compositor and rest':<22}{rest:8.0f} ms   (Glint adds - its stages)")
     print(f"  Glint's stages in all     {sum(st.values()) + clear:8.1f} ms")
+    # The first frame of a process pays what later ones reuse: fresh pages for
+    # the buffers the core's pool then keeps, the GL context where GL is used.
+    print("  first frame of the process (warm-up, not in the medians): "
+          + ", ".join(f"{name} {first.get(name, 0.0):.0f}" for name in ("export", "rasterize", "trace", "images"))
+          + f" ms, {sum(first.values()):.0f} ms in all")
 
 
 if __name__ == "__main__":  # bench/world_specular_bench.py imports build_scene

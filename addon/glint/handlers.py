@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
 import traceback
 
 import bpy
@@ -42,6 +43,9 @@ _announced = {"core": None}
 
 # How often the main thread looks for queued work (reports, redraws, repairs).
 TICK_SECONDS = 0.2
+# How often it hands the core's idle pooled buffers back (glint_core.buffer_pool):
+# between renders nothing else in the core runs to notice they went idle.
+TRIM_SECONDS = 10.0
 
 
 def _enabled(scene) -> bool:
@@ -195,7 +199,7 @@ def _redraw_panels() -> None:
                     area.tag_redraw()
 
 
-_seen = {"version": -1}
+_seen = {"version": -1, "trimmed": 0.0}
 
 
 def _main_thread_tick():
@@ -208,6 +212,13 @@ def _main_thread_tick():
             break
         try:
             fn()
+        except Exception:
+            traceback.print_exc()
+    now = time.monotonic()
+    if now - _seen["trimmed"] >= TRIM_SECONDS:
+        _seen["trimmed"] = now
+        try:
+            native.release_buffers(idle_only=True)
         except Exception:
             traceback.print_exc()
     if STATE.version != _seen["version"]:
@@ -231,6 +242,7 @@ def on_load_post(*args):
     # Files made elsewhere (or saved before the group changed) get their
     # compositor set up on load; update callbacks do not run on load.
     compositor.forget_filled()
+    native.release_buffers(idle_only=False)  # sized for the last file's frames
     for scene in bpy.data.scenes:
         if _enabled(scene):
             try:
@@ -267,3 +279,4 @@ def unregister():
             lst.remove(fn)
     if bpy.app.timers.is_registered(_main_thread_tick):
         bpy.app.timers.unregister(_main_thread_tick)
+    native.release_buffers(idle_only=False)

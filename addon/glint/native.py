@@ -186,6 +186,14 @@ def describe() -> Optional[str]:
     return f"{MODULE_NAME} {version()} from {_source} ({_origin})"
 
 
+def release_buffers(idle_only: bool = True) -> float:
+    """Give the core's pooled buffers back to the system (with ``idle_only``,
+    those unused for the pool's idle time); MiB freed. Never loads the core."""
+    if _module is None:
+        return 0.0
+    return float(_module.release_buffers(idle_only=idle_only))
+
+
 def reset() -> None:
     """Forget the cached result (tests; the preferences' Retry button)."""
     global _module, _error, _origin, _source, _tried

@@ -25,6 +25,7 @@ namespace glint::py {
 void bind_exr(pyb::module_& m);
 void bind_raster(pyb::module_& m);
 void bind_metrics(pyb::module_& m);
+void bind_memory(pyb::module_& m);
 
 namespace {
 
@@ -271,17 +272,6 @@ PYBIND11_MODULE(glint_core, m) {
   m.attr("STAGES") = pyb::cast(pipeline_stage_names());
   m.attr("MAX_SHININESS") = kMaxShininess;
   m.attr("MAX_STEPS") = kMaxSteps;
-  m.attr("MEMORY_LIMIT_ENV") = kMemoryLimitEnv;
-  m.def(
-      "memory_limit",
-      [](double limit_mb) {
-        const MemoryLimit l = memory_limit(limit_mb);
-        return pyb::make_tuple(l.bytes, l.source);
-      },
-      "memory_limit_mb"_a = 0.0,
-      "(bytes, source): the memory one call may allocate with this memory_limit_mb (0: the\n"
-      "default, GLINT_MEMORY_LIMIT_MB or half of physical memory) and where it came from.");
-
   m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
         "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
         "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
@@ -509,4 +499,5 @@ PYBIND11_MODULE(glint_core, m) {
   bind_exr(m);
   bind_raster(m);
   bind_metrics(m);
+  bind_memory(m);
 }

@@ -1,25 +1,38 @@
 // The one buffer type every stage reads and writes.
 #pragma once
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <new>
 #include <utility>
 #include <vector>
 
+#include "glint/buffer_pool.h"
+
 namespace glint {
 
-// std::allocator, except that a vector sized without a value leaves its floats
-// uninitialised. An image a stage overwrites whole (a trace's output, a
-// numpy array copied in) then costs its page faults alone, taken by the
-// threads that write it, instead of a serial zeroing pass first: 33 MB per
-// 1920x1080 buffer, a tenth of the hiz trace.
+// std::allocator with two changes for pixel buffers. A vector sized without a
+// value leaves its floats uninitialised: an image a stage overwrites whole (a
+// trace's output, a numpy array copied in) then costs its page faults alone,
+// taken by the threads that write it, instead of a serial zeroing pass first.
+// And buffers of kPoolMinBytes or more come from, and go back to, the buffer
+// pool (glint/buffer_pool.h), so the next frame finds them already mapped.
 template <class T>
-struct DefaultInitAllocator : std::allocator<T> {
+struct PixelAllocator : std::allocator<T> {
   template <class U>
   struct rebind {
-    using other = DefaultInitAllocator<U>;
+    using other = PixelAllocator<U>;
   };
   using std::allocator<T>::allocator;
+  T* allocate(std::size_t n) {
+    if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_array_new_length();
+    if (n * sizeof(T) >= kPoolMinBytes) return static_cast<T*>(pool_allocate(n * sizeof(T)));
+    return std::allocator<T>::allocate(n);
+  }
+  void deallocate(T* p, std::size_t n) noexcept {
+    if (n * sizeof(T) >= kPoolMinBytes) return pool_deallocate(p, n * sizeof(T));
+    std::allocator<T>::deallocate(p, n);
+  }
   template <class U>
   void construct(U* p) noexcept(noexcept(::new (static_cast<void*>(p)) U)) {
     ::new (static_cast<void*>(p)) U;
@@ -30,7 +43,7 @@ struct DefaultInitAllocator : std::allocator<T> {
   }
 };
 
-using PixelBuffer = std::vector<float, DefaultInitAllocator<float>>;
+using PixelBuffer = std::vector<float, PixelAllocator<float>>;
 
 // An RGBA float32 image, pixels stored [row][col][channel], C-contiguous.
 // Row 0 is the BOTTOM row (OpenGL and Blender order), so pixel (x, y) has its

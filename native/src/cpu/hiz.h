@@ -3,7 +3,6 @@
 // trace_hiz.frag; docs/marches.md explains the method.
 #pragma once
 #include <cstddef>
-#include <memory>
 #include <vector>
 
 #include "glint/image.h"
@@ -25,13 +24,13 @@ struct HizPyramid {
   // farthest view distance its surfaces reach once their thickness is added.
   // Cells with nothing seen hold (+inf, -inf) and never overlap a ray.
   // Not zero-filled: every cell is written once, by the worker threads.
-  std::unique_ptr<float[]> range;
+  PixelBuffer range;
 
   size_t index(int level, int i, int j) const {
     return offset[level] + static_cast<size_t>(j) * width[level] + i;
   }
-  const float* cell(int level, int i, int j) const { return range.get() + index(level, i, j) * 2; }
-  float* cell(int level, int i, int j) { return range.get() + index(level, i, j) * 2; }
+  const float* cell(int level, int i, int j) const { return range.data() + index(level, i, j) * 2; }
+  float* cell(int level, int i, int j) { return range.data() + index(level, i, j) * 2; }
 };
 
 // The inverse projection as floats, row-major: what the base level needs to
@@ -41,14 +40,13 @@ struct HizCamera {
 };
 HizCamera hiz_camera(const Mat4& projection);
 
-// xyz per texel, row-major. Not zero-filled: build_hiz_pyramid() writes
-// every texel once on the worker threads, where zero-filling 25 MB (at 1080p)
-// cost a serial pass over fresh pages on the calling thread each frame.
+// xyz per texel, row-major. Not zero-filled (a PixelBuffer sized without a
+// value): build_hiz_pyramid() writes every texel once on the worker threads.
 struct HizPlanes {
   int width = 0, height = 0;
-  std::unique_ptr<float[]> xyz;
-  const float* px(int x, int y) const { return xyz.get() + (static_cast<size_t>(y) * width + x) * 3; }
-  float* px(int x, int y) { return xyz.get() + (static_cast<size_t>(y) * width + x) * 3; }
+  PixelBuffer xyz;
+  const float* px(int x, int y) const { return xyz.data() + (static_cast<size_t>(y) * width + x) * 3; }
+  float* px(int x, int y) { return xyz.data() + (static_cast<size_t>(y) * width + x) * 3; }
 };
 
 // The normal of each texel's tangent plane, for the pyramid's base and the

@@ -399,13 +399,13 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     h = std::max(1, h / 2);
   }
   p.levels = static_cast<int>(p.width.size());
-  p.range.reset(new float[cells * 2]);
+  p.range.resize(cells * 2);
   planes.width = position.width;
   planes.height = position.height;
-  planes.xyz.reset(new float[position.pixel_count() * 3]);
+  planes.xyz.resize(position.pixel_count() * 3);
   parallel_rows(0, position.height, threads, [&](int y) {
     hiz_plane_normals_row(position, normal, y, planes);
-    float* row = p.range.get() + static_cast<size_t>(y) * position.width * 2;
+    float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
     for (int x = 0; x < position.width; ++x)
       base_range(position, planes, back_position, cam, thickness, x, y, row + 2 * x);
   });

@@ -26,10 +26,6 @@
 #include <cstdint>
 #include <limits>
 
-#ifdef __linux__
-#include <sys/mman.h>
-#endif
-
 #include "glint/errors.h"
 #include "glint/memory.h"
 #include "glint/stages.h"
@@ -395,27 +391,6 @@ struct DepthRows {
   int32_t* back_winner;
 };
 
-// A zeroed width x height image. At 1920x1080 each is 33 MB of fresh pages
-// every call, and faulting them in 4 KiB at a time cost more than all the
-// rasterizing; on Linux they are asked to be 2 MiB pages before the first
-// touch (a hint: where it is refused, nothing else changes).
-Image blank_image(int width, int height) {
-  Image img;
-  img.width = width;
-  img.height = height;
-  const size_t n = static_cast<size_t>(width) * height * 4;
-  img.data.reserve(n);
-#ifdef MADV_HUGEPAGE
-  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-  const uintptr_t a = reinterpret_cast<uintptr_t>(img.data.data());
-  const uintptr_t lo = (a + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t hi = (a + n * sizeof(float)) & ~(kHuge - 1);
-  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
-#endif
-  img.data.resize(n, 0.0f);  // zeroed: the rasterizer writes covered pixels only
-  return img;
-}
-
 class Rasterizer {
  public:
   Rasterizer(const RasterInputs& in, int threads)
@@ -625,10 +600,11 @@ void Rasterizer::shade_band(int band, const DepthRows& rows, const std::vector<T
 GBufferImages Rasterizer::run() {
   const bool back = in_.back_layer;
   const size_t count = in_.mesh.triangle_count();
-  // The outputs are most of the memory a call touches: zero them on all
-  // threads at once.
+  // The outputs are most of the memory a call touches (33 MB each at
+  // 1920x1080; the buffer pool keeps them mapped between frames): zero them
+  // on all threads at once, since only covered pixels are written later.
   Image* images[4] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position};
-  parallel_rows(0, back ? 4 : 3, threads_, [&](int k) { *images[k] = blank_image(width_, height_); });
+  parallel_rows(0, back ? 4 : 3, threads_, [&](int k) { *images[k] = Image(width_, height_, 0.0f); });
 
   if (count <= kChunk) {
     // The usual case: every triangle set up at once, so each band can be
