@@ -11,6 +11,13 @@
 
 uniform sampler2D u_pyramid;  // RG32F, full mip chain: (nearest, farthest + thickness)
 uniform int u_levels;
+// hiz_reuses_rays() (glint/marches.h): 0 traces each pixel; 1 traces pixel
+// (2x, 2y) into a half-size target, which trace_hiz_fill.frag then spreads.
+// The depth test runs first so that the pixels the fill pass settled (it
+// marks them nearer) never start this program: a SIMD rasterizer then skips
+// whole blocks of them instead of running the walk's set-up masked off.
+uniform int u_pass;
+layout(early_fragment_tests) in;
 
 layout(location = 0) out vec4 out_uv;
 
@@ -203,10 +210,9 @@ float hit_visibility(float u, float v, bool certain) {
   return vis;
 }
 
-void main() {
-  out_uv = vec4(0.0);
-  ivec2 origin = pixel_coord();
-  if (!make_ray(origin)) return;
+// march_hiz(): the pixel's own ray walked to its hit.
+vec4 trace_pixel(ivec2 origin) {
+  if (!make_ray(origin)) return vec4(0.0);
   int top = u_levels - 1;
   int budget = u_steps * u_levels;
   float t = ray_exit(ivec4(origin, origin + 1));
@@ -265,12 +271,12 @@ void main() {
         if (level < top && ((known >> uint(level + 1)) & 1u) == 0u) ++level;  // empty so far: a bigger stride
       }
     }
-    if (!test) return;
+    if (!test) return vec4(0.0);
     float th;
     bool located;
     vec3 n, p;
     int outcome = texel_hit(c, t, te, th, located, n, p);
-    if (outcome == BLOCKED) return;
+    if (outcome == BLOCKED) return vec4(0.0);
     if (outcome == HIT) {
       hit = true;
       hit_c = c;
@@ -289,11 +295,17 @@ void main() {
   }
   // Outside the loops for the same reason: the outline test's five fetches
   // run once per pixel, not once per texel test of any lane.
-  if (!hit) return;
+  if (!hit) return vec4(0.0);
   precise float u = (g_f0.x + hit_t * g_d.x) / u_size.x;
   precise float v = (g_f0.y + hit_t * g_d.y) / u_size.y;
-  if (!finite_f(u) || !finite_f(v)) return;
+  if (!finite_f(u) || !finite_f(v)) return vec4(0.0);
   bool certain = hit_located && !on_outline(hit_c, hit_p, hit_n);
   float vis = hit_visibility(u, v, certain);
-  out_uv = vec4(u, v, vis, vis);
+  return vec4(u, v, vis, vis);
+}
+
+void main() {
+  ivec2 c = pixel_coord();
+  // u_pass 1 draws the half-size target: pixel c traces pixel 2c.
+  out_uv = trace_pixel(u_pass == 1 ? c * 2 : c);
 }

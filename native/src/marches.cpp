@@ -35,6 +35,10 @@ const std::vector<MarchInfo>& march_table() {
        "Min/max depth pyramid walk: skips empty space cell by cell, hits where the ray's depth span "
        "meets a surface, never skips a depth interval",
        {{"max_distance", "length of the reflected ray, view units"},
+        {"resolution",
+         "0.5 or below: rays of every other pixel of every other row first, and each other pixel's "
+         "only where the traced pixels around it disagree (else it takes their hit, or their miss); "
+         "above 0.5: every pixel's ray"},
         {"steps", "walk budget per ray, in cells per pyramid level (steps x levels cells at most)"},
         {"thickness",
          "how far behind a surface is solid (a ray there is blocked: nothing reported), view "

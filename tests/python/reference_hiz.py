@@ -277,3 +277,53 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     if b_behind and behind_by(tb) <= thick:
         return "blocked", tb
     return "pass", ta
+
+
+# The reuse of rays at resolution <= 0.5 (docs/marches.md, "Reusing neighbours'
+# rays"), written from that description: pixels with both coordinates even keep
+# their own ray's result; any other pixel takes its traced neighbours' common
+# miss, or the mean of their hits when those lie within 3 pixels of each other,
+# provided that all of them lie on its own smooth surface; else its own ray's.
+REUSE_COS, REUSE_DEPTH, REUSE_PIXELS = 0.98, 0.02, 3.0
+
+
+def reuse_rays(position, normal, full):
+    """The reused-ray result, given ``full``: every pixel's own-ray result (trace_hiz)."""
+    h, w = full.shape[:2]
+    out = np.array(full, dtype=np.float64)
+    pos = np.asarray(position, np.float64)
+    nrm = np.asarray(normal, np.float64)[..., :3]
+
+    def same_surface(y, x, qy, qx):
+        if not (0 <= qx < w and 0 <= qy < h):
+            return False
+        p, q = pos[y, x], pos[qy, qx]
+        if not _seen(q) or not abs(q[2] - p[2]) <= REUSE_DEPTH * abs(p[2]):
+            return False
+        n, m = nrm[y, x], nrm[qy, qx]
+        d = float(np.dot(n, m))
+        return d > 0 and d * d >= REUSE_COS ** 2 * float(np.dot(n, n)) * float(np.dot(m, m))
+
+    for y in range(h):
+        for x in range(w):
+            if x % 2 == 0 and y % 2 == 0:
+                continue
+            if not _seen(pos[y, x]) or not all(math.isfinite(v) for v in nrm[y, x]):
+                continue
+            if y % 2 == 0:
+                qs = [(y, x - 1), (y, x + 1)]
+            elif x % 2 == 0:
+                qs = [(y - 1, x), (y + 1, x)]
+            else:
+                qs = [(y - 1, x - 1), (y - 1, x + 1), (y + 1, x - 1), (y + 1, x + 1)]
+            if not all(same_surface(y, x, qy, qx) for qy, qx in qs):
+                continue
+            got = [full[qy, qx] for qy, qx in qs]
+            hits = [g for g in got if g[2] > 0]
+            if not hits:
+                out[y, x] = 0.0
+            elif len(hits) == len(got) and all(
+                    math.hypot((a[0] - b[0]) * w, (a[1] - b[1]) * h) <= REUSE_PIXELS for a in got for b in got):
+                vis = min(g[2] for g in got)
+                out[y, x] = (np.mean([g[0] for g in got]), np.mean([g[1] for g in got]), vis, vis)
+    return out

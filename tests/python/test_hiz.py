@@ -11,6 +11,7 @@ import pytest
 import analytic as A
 import analytic_mesh
 import glint_core
+from reference_hiz import reuse_rays
 from reference_hiz import trace_hiz as reference_hiz
 
 SCENES = {
@@ -50,7 +51,8 @@ def test_agrees_with_the_float64_reference(name, back, bump):
     if back:
         kw["back_position"] = back_layer
     nrm = bumped_normals(gb, bump) if bump else gb["normal"]
-    core = glint_core.trace(gb["position"], nrm, gb["projection"], march="hiz", steps=64, **kw)
+    # resolution 1: every pixel's own ray, which is what the reference walks.
+    core = glint_core.trace(gb["position"], nrm, gb["projection"], march="hiz", steps=64, resolution=1.0, **kw)
     ref = reference_hiz(gb["position"], nrm, gb["projection"], **kw)
     both = (core[..., 2] > 0) == (ref[..., 2] > 0)
     # uv and visibility (confidence times the edge fade) alike
@@ -63,6 +65,32 @@ def test_agrees_with_the_float64_reference(name, back, bump):
     assert share >= 0.99
 
 
+@pytest.mark.parametrize("backend", ["cpu", "gl"])
+@pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
+def test_reused_rays_agree_with_the_float64_reference(name, backend):
+    """At resolution <= 0.5 a quarter of the rays are traced and the rest reuse them
+    where they agree: the result matches the reference's own rays spread by the rule
+    written out in reference_hiz.reuse_rays, and most pixels did reuse."""
+    if backend == "gl":
+        try:
+            glint_core.backend_name("gl")
+        except glint_core.BackendUnavailable as exc:
+            pytest.skip(f"no GL here: {exc}")
+    gb, _, _ = data(name, 40, 30)
+    kw = dict(max_distance=15.0, thickness=0.5)
+    core = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march="hiz", steps=64,
+                            resolution=0.3, backend=backend, **kw)
+    full = reference_hiz(gb["position"], gb["normal"], gb["projection"], **kw)
+    ref = reuse_rays(gb["position"], gb["normal"], full)
+    both = (core[..., 2] > 0) == (ref[..., 2] > 0)
+    close = np.where(ref[..., 2] > 0, np.abs(core[..., :3] - ref[..., :3]).max(axis=-1) < 1e-3, True)
+    share = (both & close).mean()
+    spread = (np.abs(ref - full).max(axis=-1) > 0).sum()
+    print(f"hiz {name} {backend}: {share * 100:.2f}% agree, {spread} pixels differ from their own ray")
+    assert share >= 0.99
+    assert spread > 0.03 * ref[..., 0].size  # the reuse's uv means, not only copies
+
+
 EDGE_FADE = 0.075  # docs/marches.md: visibility fades over this share of the screen at its edges
 
 
@@ -73,8 +101,10 @@ def test_visibility_is_confidence_times_the_edge_fade(name):
     to its texel or on an outline (rare on these smooth scenes); within EDGE_FADE of an edge
     it fades linearly to 0."""
     gb, mh, _ = data(name, 160, 120)
+    # Every pixel's own ray (resolution 1): a pixel that reuses its neighbours'
+    # hits takes their least visibility, at their uvs, not its own.
     uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"],
-                          **glint_core.presets()["balanced"])
+                          **dict(glint_core.presets()["balanced"], resolution=1.0))
     h, w = uv.shape[:2]
     rep = uv[..., 2] > 0
     assert np.array_equal(uv[..., 2], uv[..., 3])
@@ -179,7 +209,7 @@ def test_tables():
     assert {"seed", "linear", "hiz"} <= set(marches)
     details = glint_core.march_details()
     assert set(details) == set(marches)
-    assert "steps" in details["hiz"]["options"] and "resolution" not in details["hiz"]["options"]
+    assert {"steps", "resolution"} <= set(details["hiz"]["options"])
     presets = glint_core.presets()
     assert {"draft", "balanced", "high"} <= set(presets)
     assert presets["balanced"]["march"] == "hiz"

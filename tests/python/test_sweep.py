@@ -22,12 +22,14 @@ def test_pareto_front_of_hand_made_points():
 
 def test_grid_keeps_only_the_knobs_a_march_reads(glint):
     grid = {"resolution": [0.1, 0.5], "steps": [5, 10], "thickness": [0.5], "max_distance": [15.0]}
-    points = sweep.grid_points(["seed", "hiz"], grid)
+    points = sweep.grid_points(["seed", "hiz", "linear"], grid)
     seed = [p for p in points if p["march"] == "seed"]
     hiz = [p for p in points if p["march"] == "hiz"]
+    linear = [p for p in points if p["march"] == "linear"]
     assert len(seed) == 4                      # resolution x steps
-    assert len(hiz) == 2                       # hiz ignores resolution
-    assert {p["resolution"] for p in hiz} == {0.1}
+    assert len(hiz) == 4                       # resolution (reusing rays at <= 0.5) x steps
+    assert len(linear) == 2                    # linear ignores resolution
+    assert {p["resolution"] for p in linear} == {0.1}
 
 
 def test_small_sweep_writes_the_expected_columns(glint, tmp_path):

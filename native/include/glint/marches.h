@@ -47,6 +47,15 @@ const MarchInfo& march_info(March m);
 const MarchInfo& march_info(const std::string& name);
 inline March parse_march(const std::string& name) { return march_info(name).id; }
 inline const char* to_string(March m) { return march_info(m).name; }
+// The hiz march at resolution <= kHizReuseResolution traces every other pixel
+// of every other row first, and each other pixel only where those traced
+// around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
+// backends decide by this.
+constexpr float kHizReuseResolution = 0.5f;
+inline bool hiz_reuses_rays(const TraceOptions& o) {
+  return o.march == March::Hiz && o.resolution <= kHizReuseResolution;
+}
+
 // "seed", "linear", ... joined with `sep`, for messages and help texts.
 std::string march_names(const char* sep = ", ");
 

@@ -21,6 +21,7 @@
 #include <cmath>
 #include <limits>
 
+#include "glint/marches.h"
 #include "glint/stages.h"
 #include "hiz.h"
 #include "parallel.h"
@@ -55,6 +56,13 @@ constexpr float kUncertain = 0.5f;
 // view distance (plus its thickness): a plane seen edge-on would otherwise
 // reach infinity and make every cell above it overlap every ray.
 constexpr float kFootprintSpread = 0.5f;
+// Reusing a neighbour's ray (reuse_neighbours()): the pixels whose hits are
+// shared lie on one smooth surface, their normals within ~11 degrees and
+// their view distances within 2% of each other, and the hits lie within 3
+// pixels of each other, so that their mean is within 1.5 pixels of each.
+constexpr float kReuseCos = 0.98f;
+constexpr float kReuseDepth = 0.02f;
+constexpr float kReusePixels = 3.0f;
 // Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
 constexpr int kMaxLevels = 32;
 
@@ -432,6 +440,61 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
   return p;
 }
 
+namespace {
+
+// Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
+// would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
+// same smooth surface (reflective, normals within kReuseCos, view distances
+// within kReuseDepth of each other), and either all missed or all hit within
+// kReusePixels of each other. Then `out` is their miss, or their hits' mean
+// uv with the least visibility of them.
+bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
+                      float o[4]) {
+  const float* p = in.position.px(x, y);
+  const float* n = in.normal.px(x, y);
+  // Only where the pixel's own ray exists (read_origin() would take it).
+  if (!texel_seen(p) || !finite(V3{p[0], p[1], p[2]}) || !finite(V3{n[0], n[1], n[2]})) return false;
+  const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  int hits = 0;
+  for (int e = 0; e < k; ++e) {
+    const int qx = q[e][0], qy = q[e][1];
+    if (qx < 0 || qy < 0 || qx >= out.width || qy >= out.height) return false;
+    if (in.specular && !is_reflective(in.specular->px(qx, qy))) return false;
+    const float* pq = in.position.px(qx, qy);
+    const float* nq = in.normal.px(qx, qy);
+    if (!texel_seen(pq) || !(std::fabs(pq[2] - p[2]) <= kReuseDepth * std::fabs(p[2]))) return false;
+    const float d = n[0] * nq[0] + n[1] * nq[1] + n[2] * nq[2];
+    const float qq = nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2];
+    if (!(d > 0.0f) || !(d * d >= kReuseCos * kReuseCos * nn * qq)) return false;
+    if (out.px(qx, qy)[2] > 0.0f) ++hits;
+  }
+  if (hits == 0) {
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    return true;
+  }
+  if (hits < k) return false;
+  const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
+  float su = 0.0f, sv = 0.0f, vis = 1.0f;
+  for (int a = 0; a < k; ++a) {
+    const float* ha = out.px(q[a][0], q[a][1]);
+    for (int b = a + 1; b < k; ++b) {
+      const float* hb = out.px(q[b][0], q[b][1]);
+      const float du = (ha[0] - hb[0]) * w, dv = (ha[1] - hb[1]) * h;
+      if (!(du * du + dv * dv <= kReusePixels * kReusePixels)) return false;
+    }
+    su += ha[0];
+    sv += ha[1];
+    vis = std::min(vis, ha[2]);
+  }
+  const float inv_k = 1.0f / static_cast<float>(k);
+  o[0] = su * inv_k;
+  o[1] = sv * inv_k;
+  o[2] = o[3] = vis;
+  return true;
+}
+
+}  // namespace
+
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   Image out = Image::uninitialized(in.position.width, in.position.height);  // march_hiz writes each pixel
   const HizCamera cam = hiz_camera(in.projection);
@@ -440,14 +503,39 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
       build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads, planes);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
   const Image* spec = in.specular;
+  auto trace_pixel = [&](int x, int y) {
+    float* o = out.px(x, y);
+    if (spec && !is_reflective(spec->px(x, y))) {
+      o[0] = o[1] = o[2] = o[3] = 0.0f;
+      return;
+    }
+    march_hiz(setup, planes, pyr, cam, in.back_position, x, y, o);
+  };
+  if (!hiz_reuses_rays(opt)) {
+    parallel_rows(0, out.height, threads, [&](int y) {
+      for (int x = 0; x < out.width; ++x) trace_pixel(x, y);
+    });
+    return out;
+  }
+  // Every other pixel of every other row first; then the rest, from them.
+  parallel_rows(0, (out.height + 1) / 2, threads, [&](int j) {
+    for (int x = 0; x < out.width; x += 2) trace_pixel(x, 2 * j);
+  });
   parallel_rows(0, out.height, threads, [&](int y) {
-    for (int x = 0; x < out.width; ++x) {
-      float* o = out.px(x, y);
-      if (spec && !is_reflective(spec->px(x, y))) {
-        o[0] = o[1] = o[2] = o[3] = 0.0f;
-        continue;
+    for (int x = (y & 1) ? 0 : 1; x < out.width; x += (y & 1) ? 1 : 2) {
+      int q[4][2];
+      int k;
+      if (!(y & 1)) {  // between two traced pixels of its row
+        q[0][0] = x - 1, q[0][1] = y, q[1][0] = x + 1, q[1][1] = y, k = 2;
+      } else if (!(x & 1)) {  // between two of its column
+        q[0][0] = x, q[0][1] = y - 1, q[1][0] = x, q[1][1] = y + 1, k = 2;
+      } else {  // at the centre of four
+        q[0][0] = x - 1, q[0][1] = y - 1, q[1][0] = x + 1, q[1][1] = y - 1;
+        q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1, k = 4;
       }
-      march_hiz(setup, planes, pyr, cam, in.back_position, x, y, o);
+      if (!(spec && !is_reflective(spec->px(x, y))) && reuse_neighbours(in, out, x, y, q, k, out.px(x, y)))
+        continue;
+      trace_pixel(x, y);
     }
   });
   return out;

@@ -52,6 +52,13 @@ class GlState {
   void build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
                      const Texture& nrm, const Texture* back);
 
+  // The hiz march reusing rays (hiz_reuses_rays()): `prog` (trace_hiz.frag,
+  // every uniform set) traces a quarter of the pixels, trace_hiz_fill.frag
+  // spreads them and marks in a depth buffer where they disagree, and `prog`
+  // runs again only there. One read-back, at the end.
+  Image trace_reusing(GLuint prog, const Texture& pos, const Texture& nrm, const Texture* spec, int w, int h,
+                      int textures);
+
   // The uniforms hiz_common.glsl declares.
   void bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back);
 
@@ -91,7 +98,9 @@ class GlState {
   // changes, so a sequence of frames allocates once. Every pass uses the
   // same few slots, so a large frame's memory is given back as soon as a
   // smaller one runs.
-  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kPlanes, kSlots };  // kPlanes: the hiz march's plane normals
+  // kPlanes: the hiz march's plane normals; kCoarse: its traced quarter of the
+  // pixels when it reuses rays (hiz_reuses_rays()).
+  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kPlanes, kCoarse, kSlots };
 
   void release(Texture& t);
 
@@ -175,6 +184,7 @@ class GlState {
   // `images` size the checks and the out-of-memory error; `name` the others.
   void mip_target(Pyramid& t, int w, int h, GLenum format, const char* stage, int images, const char* name);
   Texture env_brdf_;
+  Texture reuse_depth_;  // DEPTH32F, frame-sized: where trace_reusing() traces again
   std::map<std::string, GLuint> programs_;
 };
 

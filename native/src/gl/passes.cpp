@@ -51,8 +51,66 @@ Image GlState::trace(const TraceInputs& in, const TraceOptions& opt) {
     gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
     gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
     gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
+    gl_.Uniform1i(loc(prog, "u_pass"), 0);
+    if (hiz_reuses_rays(opt)) return trace_reusing(prog, pos, nrm, spec, w, h, passes_textures);
   }
   return draw_and_read(w, h, info.name, passes_textures);
+}
+
+Image GlState::trace_reusing(GLuint prog, const Texture& pos, const Texture& nrm, const Texture* spec, int w,
+                             int h, int textures) {
+  const char* pass = "hiz";
+  // 1. Pixel (2x, 2y) of the frame into pixel (x, y) of a half-size target.
+  gl_.Uniform1i(loc(prog, "u_pass"), 1);
+  const int cw = (w + 1) / 2, ch = (h + 1) / 2;
+  const Texture& quarter = target(kCoarse, cw, ch, pass, textures + 2);
+  attach(quarter);
+  draw(cw, ch);
+  // 2. Every pixel: the quarter spread where it agrees; depth 1 elsewhere.
+  if (reuse_depth_.w != w || reuse_depth_.h != h) {
+    release(reuse_depth_);
+    check_size(w, h, pass, textures + 2);
+    while (gl_.GetError() != GL_NO_ERROR) {
+    }
+    gl_.GenTextures(1, &reuse_depth_.id);
+    scratch_unit();
+    gl_.BindTexture(GL_TEXTURE_2D, reuse_depth_.id);
+    gl_.TexStorage2D(GL_TEXTURE_2D, 1, GL_DEPTH_COMPONENT32F, w, h);
+    const GLenum err = gl_.GetError();
+    if (err != GL_NO_ERROR) {
+      release(reuse_depth_);
+      if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, pass, textures + 2);
+      throw Error(std::string("glint GL: allocating the hiz march's depth mask failed: ") + gl_error_name(err));
+    }
+    reuse_depth_.w = w;
+    reuse_depth_.h = h;
+  }
+  const GLuint fill = program("trace_hiz_fill.frag");
+  gl_.UseProgram(fill);
+  bind(fill, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(fill, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(fill, "u_specular", 2, spec ? *spec : nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
+  gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
+  bind(fill, "u_coarse", 7, quarter, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  const Texture& out = target(kOut, w, h, pass, textures + 2);
+  attach(out);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, reuse_depth_.id, 0);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthMask(GL_TRUE);
+  gl_.DepthFunc(GL_ALWAYS);
+  draw(w, h);
+  // 3. The walk again, where the depth test lets it (the triangle lies at 0.5).
+  gl_.UseProgram(prog);
+  gl_.Uniform1i(loc(prog, "u_pass"), 0);
+  gl_.DepthMask(GL_FALSE);
+  gl_.DepthFunc(GL_LESS);
+  draw(w, h);
+  gl_.Disable(GL_DEPTH_TEST);
+  gl_.DepthMask(GL_TRUE);
+  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, 0, 0);
+  debug_check(pass);
+  return read(w, h, GL_COLOR_ATTACHMENT0, pass);
 }
 
 void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,

@@ -24,6 +24,7 @@ GlState::~GlState() {
   if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
   if (cone_chain_.id) gl_.DeleteTextures(1, &cone_chain_.id);
   release(env_brdf_);
+  release(reuse_depth_);
   release_raster();
   gl_.DeleteFramebuffers(1, &fbo_);
   gl_.DeleteVertexArrays(1, &empty_vao_);
