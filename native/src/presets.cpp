@@ -25,17 +25,19 @@ const std::vector<Preset>& presets() {
   // scene, not the quality, and a user sets them for the scene's scale.
   static const std::vector<Preset> table = {
       {"draft",
-       "Hi-Z walk, 5 cells per level. Blender samples, 960x540: recall 0.99 (0.64 on normal-mapped "
-       "water), precision 0.92-0.99 with the back layer; ~0.5x the seed's time (docs/presets.md)",
+       "Hi-Z walk, 5 cells per level, a quarter of the rays traced and reused where neighbours agree. "
+       "1080p analytic scenes: recall 0.91-0.94, precision 0.999; ~0.2x the seed's CPU time "
+       "(docs/marches.md)",
        trace_of(March::Hiz, 15.0f, 0.3f, 5, 0.5f)},
       {"balanced",
-       "Hi-Z walk, 10 cells per level, the knee of the fronts. Blender samples, 960x540: recall 0.99 "
-       "(0.91 on normal-mapped water), precision 0.92-0.99 with the back layer; 0.4-0.6x the seed's time",
+       "Hi-Z walk, 10 cells per level, a quarter of the rays traced and reused where neighbours agree. "
+       "1080p analytic scenes: recall 0.98-0.99, precision 0.999; ~0.2x the seed's CPU time. Blender "
+       "samples: precision 0.92-0.99 with the back layer (docs/presets.md)",
        trace_of(March::Hiz, 15.0f, 0.3f, 10, 0.5f)},
       {"high",
-       "Hi-Z walk, 16 cells per level: no ray runs out of budget. Blender samples, 960x540: recall 0.99 "
-       "(0.95 on normal-mapped water), precision as balanced; about balanced's time",
-       trace_of(March::Hiz, 15.0f, 0.3f, 16, 0.5f)},
+       "Hi-Z walk, 16 cells per level, every pixel's own ray: no ray runs out of budget and none is "
+       "reused. About 1.6x balanced's CPU time, a third of the seed's (docs/marches.md)",
+       trace_of(March::Hiz, 15.0f, 1.0f, 16, 0.5f)},
       {"exact",
        "Every mirror ray traced against the scene's triangles, on the CPU; needs mesh. Precision and "
        "recall 1 by definition; 0.2-0.5x the seed's time on the samples' few thousand triangles",
