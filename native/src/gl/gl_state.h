@@ -116,10 +116,17 @@ class GlState {
 
   [[noreturn]] void out_of_memory(int w, int h, const char* pass, int textures);
 
-  // A w x h RGBA32F texture in `slot`, allocated if its size changed.
+  // `t` as a w x h texture of `internal` (`format` the matching pixel
+  // format, `name` for errors: "RGBA32F"), allocated if its size changed.
   // Allocation errors are checked in every build: running out of memory is
   // an expected outcome for large frames, not a bug.
-  Texture& target(Slot slot, int w, int h, const char* pass, int textures);
+  Texture& sized(Texture& t, int w, int h, GLenum internal, GLenum format, const char* name, const char* pass,
+                 int textures);
+
+  // A w x h RGBA32F texture in `slot` (sized()).
+  Texture& target(Slot slot, int w, int h, const char* pass, int textures) {
+    return sized(textures_[slot], w, h, GL_RGBA32F, GL_RGBA, "RGBA32F", pass, textures);
+  }
 
   Texture& upload(Slot slot, const Image& img, const char* pass, int textures);
 

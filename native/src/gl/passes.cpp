@@ -67,24 +67,7 @@ Image GlState::trace_reusing(GLuint prog, const Texture& pos, const Texture& nrm
   attach(quarter);
   draw(cw, ch);
   // 2. Every pixel: the quarter spread where it agrees; depth 1 elsewhere.
-  if (reuse_depth_.w != w || reuse_depth_.h != h) {
-    release(reuse_depth_);
-    check_size(w, h, pass, textures + 2);
-    while (gl_.GetError() != GL_NO_ERROR) {
-    }
-    gl_.GenTextures(1, &reuse_depth_.id);
-    scratch_unit();
-    gl_.BindTexture(GL_TEXTURE_2D, reuse_depth_.id);
-    gl_.TexStorage2D(GL_TEXTURE_2D, 1, GL_DEPTH_COMPONENT32F, w, h);
-    const GLenum err = gl_.GetError();
-    if (err != GL_NO_ERROR) {
-      release(reuse_depth_);
-      if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, pass, textures + 2);
-      throw Error(std::string("glint GL: allocating the hiz march's depth mask failed: ") + gl_error_name(err));
-    }
-    reuse_depth_.w = w;
-    reuse_depth_.h = h;
-  }
+  sized(reuse_depth_, w, h, GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT, "DEPTH32F", pass, textures + 2);
   const GLuint fill = program("trace_hiz_fill.frag");
   gl_.UseProgram(fill);
   bind(fill, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);

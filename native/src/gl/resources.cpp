@@ -125,8 +125,8 @@ void GlState::out_of_memory(int w, int h, const char* pass, int textures) {
               info().renderer + "). Use a smaller image or backend=\"cpu\".");
 }
 
-GlState::Texture& GlState::target(Slot slot, int w, int h, const char* pass, int textures) {
-  Texture& t = textures_[slot];
+GlState::Texture& GlState::sized(Texture& t, int w, int h, GLenum internal, GLenum format, const char* name,
+                                  const char* pass, int textures) {
   if (t.id && t.w == w && t.h == h) return t;
   release(t);
   check_size(w, h, pass, textures);
@@ -136,13 +136,13 @@ GlState::Texture& GlState::target(Slot slot, int w, int h, const char* pass, int
   scratch_unit();
   gl_.BindTexture(GL_TEXTURE_2D, t.id);
   gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-  gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+  gl_.TexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, GL_FLOAT, nullptr);
   const GLenum err = gl_.GetError();
   if (err != GL_NO_ERROR) {
     release(t);
     if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, pass, textures);
-    throw Error(std::string("glint GL: allocating a ") + size_text(w, h) + " RGBA32F texture for " +
-                pass + " failed: " + gl_error_name(err));
+    throw Error(std::string("glint GL: allocating a ") + size_text(w, h) + " " + name + " texture for " + pass +
+                " failed: " + gl_error_name(err));
   }
   t.w = w;
   t.h = h;
