@@ -447,9 +447,11 @@ namespace {
 // same smooth surface (reflective, normals within kReuseCos, view distances
 // within kReuseDepth of each other), and either all missed or all hit within
 // kReusePixels of each other. Then `out` is their miss, or their hits' mean
-// uv with the least visibility of them.
+// uv with the least visibility of them. False also where the pixel itself is
+// not reflective: its own trace writes its 0 then.
 bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
                       float o[4]) {
+  if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
   const float* p = in.position.px(x, y);
   const float* n = in.normal.px(x, y);
   // Only where the pixel's own ray exists (read_origin() would take it).
@@ -533,9 +535,7 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
         q[0][0] = x - 1, q[0][1] = y - 1, q[1][0] = x + 1, q[1][1] = y - 1;
         q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1, k = 4;
       }
-      if (!(spec && !is_reflective(spec->px(x, y))) && reuse_neighbours(in, out, x, y, q, k, out.px(x, y)))
-        continue;
-      trace_pixel(x, y);
+      if (!reuse_neighbours(in, out, x, y, q, k, out.px(x, y))) trace_pixel(x, y);
     }
   });
   return out;
