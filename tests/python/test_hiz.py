@@ -67,15 +67,12 @@ def test_agrees_with_the_float64_reference(name, back, bump):
 
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
-def test_reused_rays_agree_with_the_float64_reference(name, backend):
+def test_reused_rays_agree_with_the_float64_reference(name, backend, request):
     """At resolution <= 0.5 a quarter of the rays are traced and the rest reuse them
     where they agree: the result matches the reference's own rays spread by the rule
     written out in reference_hiz.reuse_rays, and most pixels did reuse."""
     if backend == "gl":
-        try:
-            glint_core.backend_name("gl")
-        except glint_core.BackendUnavailable as exc:
-            pytest.skip(f"no GL here: {exc}")
+        request.getfixturevalue("gl")  # skips where GL cannot run
     gb, _, _ = data(name, 40, 30)
     kw = dict(max_distance=15.0, thickness=0.5)
     core = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march="hiz", steps=64,
@@ -230,11 +227,7 @@ def test_back_position_is_checked():
 @pytest.mark.parametrize("bump", [0.0, 6.0])
 @pytest.mark.parametrize("back", [False, True])
 @pytest.mark.parametrize("name", list(SCENES))
-def test_gl_matches_cpu(name, back, bump):
-    try:
-        glint_core.backend_name("gl")
-    except glint_core.BackendUnavailable as exc:
-        pytest.skip(f"no GL here: {exc}")
+def test_gl_matches_cpu(name, back, bump, gl):
     gb, _, back_layer = data(name, 160, 120)
     kw = dict(glint_core.presets()["balanced"], back_position=back_layer if back else None)
     nrm = bumped_normals(gb, bump) if bump else gb["normal"]
