@@ -17,6 +17,9 @@ uniform int u_levels;
 // marks them nearer) never start this program: a SIMD rasterizer then skips
 // whole blocks of them instead of running the walk's set-up masked off.
 uniform int u_pass;
+// TraceOptions::blocked: 1 (occluder) reports a blocked ray at the texel that
+// blocks it as (u, v, edge fade, 0); 0 (miss) reports nothing.
+uniform int u_blocked;
 layout(early_fragment_tests) in;
 
 layout(location = 0) out vec4 out_uv;
@@ -224,6 +227,7 @@ vec4 trace_pixel(ivec2 origin) {
   uint known = 0u;
   int it = 0;
   bool hit = false;
+  bool blocked = false;
   ivec2 hit_c;
   float hit_t;
   bool hit_located;
@@ -276,7 +280,12 @@ vec4 trace_pixel(ivec2 origin) {
     bool located;
     vec3 n, p;
     int outcome = texel_hit(c, t, te, th, located, n, p);
-    if (outcome == BLOCKED) return vec4(0.0);
+    if (outcome == BLOCKED) {
+      if (u_blocked == 0) return vec4(0.0);
+      blocked = true;  // what hides the hit: its texel's centre (march_hiz.cpp)
+      hit_c = c;
+      break;
+    }
     if (outcome == HIT) {
       hit = true;
       hit_c = c;
@@ -295,6 +304,10 @@ vec4 trace_pixel(ivec2 origin) {
   }
   // Outside the loops for the same reason: the outline test's five fetches
   // run once per pixel, not once per texel test of any lane.
+  if (blocked) {
+    vec2 o = (vec2(hit_c) + 0.5) / u_size;
+    return vec4(o, hit_visibility(o.x, o.y, true), 0.0);
+  }
   if (!hit) return vec4(0.0);
   precise float u = (g_f0.x + hit_t * g_d.x) / u_size.x;
   precise float v = (g_f0.y + hit_t * g_d.y) / u_size.y;

@@ -49,6 +49,7 @@ bool reuse_neighbours(ivec2 c, ivec2 q[4], int k, out vec4 o) {
   precise float su = 0.0;
   precise float sv = 0.0;
   float vis = 1.0;
+  float found = 1.0;
   for (int a = 0; a < k; ++a) {
     vec4 ha = coarse(q[a]);
     for (int b = a + 1; b < k; ++b) {
@@ -61,11 +62,12 @@ bool reuse_neighbours(ivec2 c, ivec2 q[4], int k, out vec4 o) {
     su += ha.x;
     sv += ha.y;
     vis = min(vis, ha.z);
+    found = min(found, ha.w);
   }
   precise float inv_k = 1.0 / float(k);
   precise float ou = su * inv_k;
   precise float ov = sv * inv_k;
-  o = vec4(ou, ov, vis, vis);
+  o = vec4(ou, ov, vis, found);
   return true;
 }
 

@@ -61,6 +61,8 @@ Pipeline:
   --steps N               iteration budget; per march, below      [10]
   --thickness F           hit depth tolerance, view units        [0.5]
   --march NAME            one of the marches below               [seed]
+  --blocked miss|occluder what a blocked hiz ray shows: nothing, or what
+                          hides its hit (below)                  [miss]
   --preset NAME           a preset's trace options (below); flags after it override
   --weighting physical|seed  F0 * A + B split-sum, or mean F0  [physical]
   --blur cone|box         ray length x GGX cone, or a fixed box  [cone]
@@ -225,11 +227,12 @@ Args parse_args(int argc, char** argv, bool& help) {
         throw UsageError{flag + " " + v + ": that march needs the scene's triangles, which an EXR does not hold"};
     } else if (flag == "--blur-size") a.opt.blur.size = parse_int(flag, next());
     else if (flag == "--blur-separation") a.opt.blur.separation = static_cast<float>(parse_double(flag, next()));
-    else if (flag == "--weighting" || flag == "--blur") {
+    else if (flag == "--weighting" || flag == "--blur" || flag == "--blocked") {
       const std::string v = next();
       try {
         if (flag == "--weighting") a.opt.weighting = glint::parse_weighting(v);
-        else a.opt.blur_mode = glint::parse_blur_mode(v);
+        else if (flag == "--blur") a.opt.blur_mode = glint::parse_blur_mode(v);
+        else a.opt.trace.blocked = glint::parse_blocked(v);
       } catch (const glint::InvalidArgument& e) {
         throw UsageError{flag + ": " + std::string(e.what()).substr(std::string(e.what()).find(": ") + 2)};
       }
@@ -382,6 +385,7 @@ int run(const Args& a) {
                  " steps=" + std::to_string(o.trace.steps) +
                  " thickness=" + number(o.trace.thickness) +
                  " march=" + glint::to_string(o.trace.march) +
+                 " blocked=" + glint::to_string(o.trace.blocked) +
                  " weighting=" + glint::to_string(o.weighting) +
                  " blur=" + glint::to_string(o.blur_mode) +
                  " blur_size=" + std::to_string(o.blur.size) +

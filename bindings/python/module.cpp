@@ -30,7 +30,7 @@ void bind_memory(pyb::module_& m);
 namespace {
 
 TraceOptions trace_options(float max_distance, float resolution, int steps, float thickness,
-                           const std::string& march, double memory_limit_mb) {
+                           const std::string& march, const std::string& blocked, double memory_limit_mb) {
   TraceOptions o;
   o.memory_limit_mb = memory_limit_mb;
   o.max_distance = max_distance;
@@ -38,6 +38,7 @@ TraceOptions trace_options(float max_distance, float resolution, int steps, floa
   o.steps = steps;
   o.thickness = thickness;
   o.march = parse_march(march);
+  o.blocked = parse_blocked(blocked);
   validate(o);
   return o;
 }
@@ -72,9 +73,9 @@ struct TraceCall {
 
 TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::handle& normal,
                      const pyb::handle& projection, float max_distance, float resolution, int steps,
-                     float thickness, const std::string& march, const pyb::handle& back_position,
-                     const pyb::handle& mesh, const pyb::handle& specular, const std::string& backend,
-                     int threads, double memory_limit_mb, int outputs) {
+                     float thickness, const std::string& march, const std::string& blocked,
+                     const pyb::handle& back_position, const pyb::handle& mesh, const pyb::handle& specular,
+                     const std::string& backend, int threads, double memory_limit_mb, int outputs) {
   // Before any copy: a 32768x32768 request must be refused with the memory still free.
   if (auto [w, h] = array_size(position); w > 0) {
     const uint64_t px = uint64_t(w) * uint64_t(h);
@@ -88,7 +89,7 @@ TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::h
   c.nrm = image_from_array(normal, "normal", 0.0f, 3);
   require_same_size(c.pos, "position", c.nrm, "normal");
   c.proj = projection_from_array(projection);
-  c.opt = trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
+  c.opt = trace_options(max_distance, resolution, steps, thickness, march, blocked, memory_limit_mb);
   c.back = optional_image(back_position, "back_position", c.pos);
   c.spec = optional_image(specular, "specular", c.pos);
   c.tris = mesh_from_arg(mesh);
@@ -99,11 +100,11 @@ TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::h
 pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& normal,
                              const pyb::handle& projection, float max_distance, float resolution,
                              int steps, float thickness, const std::string& march,
-                             const pyb::handle& back_position, const pyb::handle& mesh,
-                             const pyb::handle& specular, const std::string& backend, int threads,
-                             double memory_limit_mb) {
+                             const std::string& blocked, const pyb::handle& back_position,
+                             const pyb::handle& mesh, const pyb::handle& specular, const std::string& backend,
+                             int threads, double memory_limit_mb) {
   const TraceCall c = trace_call("trace", position, normal, projection, max_distance, resolution, steps,
-                                 thickness, march, back_position, mesh, specular, backend, threads,
+                                 thickness, march, blocked, back_position, mesh, specular, backend, threads,
                                  memory_limit_mb, 1);
   Image uv;
   {
@@ -116,12 +117,13 @@ pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& nor
 pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& normal,
                               const pyb::handle& specular, const pyb::handle& projection, float max_distance,
                               float resolution, int steps, float thickness, const std::string& march,
-                              const pyb::handle& back_position, const pyb::handle& mesh,
-                              const std::string& backend, int threads, double memory_limit_mb) {
+                              const std::string& blocked, const pyb::handle& back_position,
+                              const pyb::handle& mesh, const std::string& backend, int threads,
+                              double memory_limit_mb) {
   if (specular.is_none()) throw InvalidArgument("specular", "expected a float32 [H, W, 4] array, got None");
   const TraceCall c = trace_call("composite_layers", position, normal, projection, max_distance, resolution,
-                                 steps, thickness, march, back_position, mesh, specular, backend, threads,
-                                 memory_limit_mb, 2);
+                                 steps, thickness, march, blocked, back_position, mesh, specular, backend,
+                                 threads, memory_limit_mb, 2);
   CompositeLayers layers;
   {
     pyb::gil_scoped_release release;
@@ -175,7 +177,8 @@ pyb::dict py_preset_descriptions() {
 pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
                       const pyb::handle& specular, const pyb::handle& color,
                       const pyb::handle& projection, float max_distance, float resolution,
-                      int steps, float thickness, const std::string& march, int blur_size,
+                      int steps, float thickness, const std::string& march, const std::string& blocked,
+                      int blur_size,
                       float blur_separation, const std::string& combine,
                       const std::string& weighting, const std::string& blur,
                       const pyb::handle& specular_base, const pyb::handle& back_position,
@@ -184,7 +187,7 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
   PipelineOptions opt;
   opt.weighting = parse_weighting(weighting);
   opt.blur_mode = parse_blur_mode(blur);
-  opt.trace = trace_options(max_distance, resolution, steps, thickness, march, memory_limit_mb);
+  opt.trace = trace_options(max_distance, resolution, steps, thickness, march, blocked, memory_limit_mb);
   if (auto [w, h] = array_size(position); w > 0) {
     const uint64_t px = uint64_t(w) * uint64_t(h);
     const int copies = back_position.is_none() ? 4 : 5;
@@ -274,8 +277,9 @@ PYBIND11_MODULE(glint_core, m) {
   m.attr("MAX_STEPS") = kMaxSteps;
   m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
         "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
-        "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
-        "specular"_a = pyb::none(), "backend"_a = "cpu", "threads"_a = 0, "memory_limit_mb"_a = 0.0,
+        "march"_a = "seed", "blocked"_a = to_string(TraceOptions{}.blocked), "back_position"_a = pyb::none(),
+        "mesh"_a = pyb::none(), "specular"_a = pyb::none(), "backend"_a = "cpu", "threads"_a = 0,
+        "memory_limit_mb"_a = 0.0,
         "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
         "max_distance and thickness are view-space units; resolution in [0, 1];\n"
         "march: a name from marches(). back_position: optional float32 [H, W, 4], the\n"
@@ -285,12 +289,14 @@ PYBIND11_MODULE(glint_core, m) {
         "specular: optional float32 [H, W, 4], the specular buffer: pixels that do not reflect\n"
         "(mean rgb 0) are not traced and report 0, as pipeline() does; their normals still\n"
         "serve the rays that hit them.\n"
+        "blocked: 'miss' (default) or 'occluder': what a hiz ray blocked by a surface it passes\n"
+        "behind reports; 'occluder' gives (u, v, weight, 0) at what hides the hit (docs/marches.md).\n"
         "memory_limit_mb: MiB the call may allocate (0: GLINT_MEMORY_LIMIT_MB or half of\n"
         "physical memory); a larger request raises MemoryLimitExceeded (a MemoryError).");
   m.def("composite_layers", &py_composite_layers, "position"_a, "normal"_a, "specular"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10, "thickness"_a = 0.5f,
-        "march"_a = "seed", "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "backend"_a = "cpu",
-        "threads"_a = 0, "memory_limit_mb"_a = 0.0,
+        "march"_a = "seed", "blocked"_a = to_string(TraceOptions{}.blocked), "back_position"_a = pyb::none(),
+        "mesh"_a = pyb::none(), "backend"_a = "cpu", "threads"_a = 0, "memory_limit_mb"_a = 0.0,
         "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
         "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, 1) from trace(), the uv\n"
         "of misses within 2 pixels of a hit continued from the hits; 'weight': float32 [H, W, 4], rgb\n"
@@ -319,7 +325,8 @@ PYBIND11_MODULE(glint_core, m) {
 
   m.def("pipeline", &py_pipeline, "position"_a, "normal"_a, "specular"_a, "color"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = 15.0f, "resolution"_a = 0.3f, "steps"_a = 10,
-        "thickness"_a = 0.5f, "march"_a = "seed", "blur_size"_a = 8, "blur_separation"_a = 1.0f,
+        "thickness"_a = 0.5f, "march"_a = "seed", "blocked"_a = to_string(TraceOptions{}.blocked),
+        "blur_size"_a = 8, "blur_separation"_a = 1.0f,
         "combine"_a = "over", "weighting"_a = to_string(PipelineOptions{}.weighting),
         "blur"_a = to_string(PipelineOptions{}.blur_mode), "specular_base"_a = pyb::none(),
         "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),

@@ -41,8 +41,11 @@ const std::vector<MarchInfo>& march_table() {
          "above 0.5: every pixel's ray"},
         {"steps", "walk budget per ray, in cells per pyramid level (steps x levels cells at most)"},
         {"thickness",
-         "how far behind a surface is solid (a ray there is blocked: nothing reported), view "
-         "units, where no back_position gives the real depth"}},
+         "how far behind a surface is solid (a ray there is blocked), view units, where no "
+         "back_position gives the real depth"},
+        {"blocked",
+         "what a blocked ray reports: 'miss' nothing; 'occluder' the uv of what hides its hit, "
+         "(u, v, weight, 0): the colour stages show it, the 4th channel says no hit was found"}},
        false, 28, 0, true, &cpu::trace_hiz, "trace_hiz.frag"},
       {March::Exact, "exact",
        "The ground truth: each pixel's mirror ray traced against the scene's triangles (Embree), "

@@ -81,4 +81,12 @@ BlurMode parse_blur_mode(const std::string& name) {
 
 const char* to_string(BlurMode b) { return b == BlurMode::Cone ? "cone" : "box"; }
 
+Blocked parse_blocked(const std::string& name) {
+  if (name == "miss") return Blocked::Miss;
+  if (name == "occluder") return Blocked::Occluder;
+  throw InvalidArgument("blocked", "expected \"miss\" or \"occluder\", got \"" + name + "\"");
+}
+
+const char* to_string(Blocked b) { return b == Blocked::Miss ? "miss" : "occluder"; }
+
 }  // namespace glint

@@ -5,7 +5,8 @@ screen-space line texel by texel from the texel after its origin, the first
 texel where the ray's depth span meets the texel's footprint range and the
 texel's tangent plane says Hit (the ray crosses it from the front, or is
 behind it by no more than a rounding slack) or Blocked (behind it within its
-thickness: report nothing). A texel's plane has its geometric normal, rebuilt
+thickness: report nothing, or with blocked="occluder" that texel's centre, as
+(u, v, edge fade, 0)). A texel's plane has its geometric normal, rebuilt
 from the positions (plane_normals()), not its shading normal. The core reaches the same texel through a min/max
 pyramid; this file visits every texel on the line, in Python floats (IEEE
 double), so agreeing with it shows the pyramid never skips one.
@@ -92,7 +93,8 @@ def _eye(proj):
     return ("direction", d)
 
 
-def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5, back_position=None):
+def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5, back_position=None,
+              blocked="miss"):
     pos = np.asarray(position, float)
     nrm = np.asarray(normal, float)
     back = None if back_position is None else np.asarray(back_position, float)
@@ -221,6 +223,8 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                         outcome, th = _texel(pos, planes, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
                                              plane_row, plane_depth, texel_thickness, depth)
                         if outcome == "blocked":
+                            if blocked == "occluder":
+                                result = (i, j), None
                             break
                         if outcome in ("hit", "hit on plane"):
                             certain = outcome == "hit on plane" and not on_outline(i, j)
@@ -228,9 +232,15 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                             break
                 t = te
             if result is not None:
-                q = f0 + result[0] * d
-                u, v = q[0] / w, q[1] / h
+                if result[1] is None:
+                    u, v = (result[0][0] + 0.5) / w, (result[0][1] + 0.5) / h
+                else:
+                    q = f0 + result[0] * d
+                    u, v = q[0] / w, q[1] / h
                 fade = min(max(min(u, 1.0 - u, v, 1.0 - v) / EDGE_FADE, 0.0), 1.0)
+                if result[1] is None:  # the occluder: shown, but no hit found
+                    out[y, x] = (u, v, fade, 0.0)
+                    continue
                 vis = (1.0 if result[1] else UNCERTAIN) * fade
                 out[y, x] = (u, v, vis, vis)
     return out
@@ -324,6 +334,6 @@ def reuse_rays(position, normal, full):
                 out[y, x] = 0.0
             elif len(hits) == len(got) and all(
                     math.hypot((a[0] - b[0]) * w, (a[1] - b[1]) * h) <= REUSE_PIXELS for a in got for b in got):
-                vis = min(g[2] for g in got)
-                out[y, x] = (np.mean([g[0] for g in got]), np.mean([g[1] for g in got]), vis, vis)
+                out[y, x] = (np.mean([g[0] for g in got]), np.mean([g[1] for g in got]),
+                             min(g[2] for g in got), min(g[3] for g in got))
     return out

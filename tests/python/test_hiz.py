@@ -65,27 +65,76 @@ def test_agrees_with_the_float64_reference(name, back, bump):
     assert share >= 0.99
 
 
+@pytest.mark.parametrize("blocked", ["miss", "occluder"])
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
-def test_reused_rays_agree_with_the_float64_reference(name, backend, request):
+def test_reused_rays_agree_with_the_float64_reference(name, backend, blocked, request):
     """At resolution <= 0.5 a quarter of the rays are traced and the rest reuse them
     where they agree: the result matches the reference's own rays spread by the rule
     written out in reference_hiz.reuse_rays, and most pixels did reuse."""
     if backend == "gl":
         request.getfixturevalue("gl")  # skips where GL cannot run
     gb, _, _ = data(name, 40, 30)
-    kw = dict(max_distance=15.0, thickness=0.5)
+    kw = dict(max_distance=15.0, thickness=0.5, blocked=blocked)
     core = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march="hiz", steps=64,
                             resolution=0.3, backend=backend, **kw)
     full = reference_hiz(gb["position"], gb["normal"], gb["projection"], **kw)
     ref = reuse_rays(gb["position"], gb["normal"], full)
     both = (core[..., 2] > 0) == (ref[..., 2] > 0)
-    close = np.where(ref[..., 2] > 0, np.abs(core[..., :3] - ref[..., :3]).max(axis=-1) < 1e-3, True)
+    close = np.where(ref[..., 2] > 0, np.abs(core - ref).max(axis=-1) < 1e-3, True)
     share = (both & close).mean()
     spread = (np.abs(ref - full).max(axis=-1) > 0).sum()
-    print(f"hiz {name} {backend}: {share * 100:.2f}% agree, {spread} pixels differ from their own ray")
+    print(f"hiz {name} {backend} {blocked}: {share * 100:.2f}% agree, {spread} pixels differ from their own ray")
     assert share >= 0.99
     assert spread > 0.03 * ref[..., 0].size  # the reuse's uv means, not only copies
+
+
+@pytest.mark.parametrize("back", [False, True])
+@pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
+def test_occluders_agree_with_the_float64_reference(name, back):
+    """blocked="occluder": a blocked ray reports (u, v, edge fade, 0) where it entered
+    the texel that blocks it, as the reference walks it; every other pixel as before."""
+    gb, _, back_layer = data(name, 40, 30)
+    kw = dict(max_distance=15.0, thickness=0.5, blocked="occluder")
+    if back:
+        kw["back_position"] = back_layer
+    core = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march="hiz", steps=64,
+                            resolution=1.0, **kw)
+    ref = reference_hiz(gb["position"], gb["normal"], gb["projection"], **kw)
+    both = (core[..., 2] > 0) == (ref[..., 2] > 0)
+    close = np.where(ref[..., 2] > 0, np.abs(core - ref).max(axis=-1) < 1e-3, True)
+    share = (both & close).mean()
+    occluders = int(((ref[..., 2] > 0) & (ref[..., 3] == 0)).sum())
+    print(f"hiz {name} back={back}: {share * 100:.2f}% agree, {occluders} occluders")
+    assert occluders >= 5, "the scene should block some rays"
+    assert share >= 0.99
+
+
+def test_an_occluder_is_what_hides_the_hit():
+    """Under a sphere and beside boxes, the rays that blocked="occluder" reports as
+    occluders are rays whose exact mirror hit is hidden from the camera, or visible
+    within 1.5 px of the occluder (a crossing found one texel late, which "miss" loses).
+    With the back-face layer the thickness is known, so nearly all of them; with one
+    thickness for the screen, rays passing just behind a sphere's outline are blocked
+    too. Every other pixel reports what blocked="miss" does."""
+    gb, mh, back = data("floor", 96, 72)
+    args = (gb["position"], gb["normal"], gb["projection"])
+    h, w = gb["object"].shape
+    for back_position, bar in ((back, 0.95), (None, 0.85)):
+        kw = dict(glint_core.presets()["balanced"], resolution=1.0, back_position=back_position)
+        miss = glint_core.trace(*args, **kw)
+        occ = glint_core.trace(*args, **kw, blocked="occluder")
+        occluder = (occ[..., 2] > 0) & (occ[..., 3] == 0)
+        assert occluder.sum() > 20
+        assert np.array_equal(occ[~occluder], miss[~occluder])
+        assert not miss[occluder].any()
+        err = np.hypot((occ[..., 0] - mh["uv"][..., 0]) * w, (occ[..., 1] - mh["uv"][..., 1]) * h)
+        hidden = mh["hit"] & ~mh["visible"]
+        late = mh["visible"] & (err <= 1.5)
+        print(f"back layer {back_position is not None}: {occluder.sum()} occluders, "
+              f"{hidden[occluder].mean():.3f} hide their exact hit, {late[occluder].mean():.3f} a visible one "
+              f"within 1.5 px")
+        assert (hidden | late)[occluder].mean() >= bar
 
 
 EDGE_FADE = 0.075  # docs/marches.md: visibility fades over this share of the screen at its edges
@@ -236,3 +285,43 @@ def test_gl_matches_cpu(name, back, bump, gl):
     same = ((cpu[..., 2] > 0) == (gl[..., 2] > 0)) & (np.abs(cpu - gl).max(axis=-1) < 1e-3)
     print(f"hiz {name} back={back} bump={bump}: CPU/GL {same.mean() * 100:.3f}% agree")
     assert same.mean() >= 0.99
+
+
+@pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
+def test_gl_matches_cpu_with_occluders(name, gl):
+    gb, _, back_layer = data(name, 160, 120)
+    for res in (0.3, 1.0):
+        kw = dict(glint_core.presets()["balanced"], resolution=res, blocked="occluder")
+        cpu = glint_core.trace(gb["position"], gb["normal"], gb["projection"], backend="cpu", **kw)
+        gl = glint_core.trace(gb["position"], gb["normal"], gb["projection"], backend="gl", **kw)
+        same = ((cpu[..., 2] > 0) == (gl[..., 2] > 0)) & (np.abs(cpu - gl).max(axis=-1) < 1e-3)
+        print(f"hiz {name} resolution {res} occluders: CPU/GL {same.mean() * 100:.3f}% agree")
+        assert same.mean() >= 0.99
+
+
+def test_the_pipeline_shows_occluders():
+    """The colour stages read the third channel, so an occluder's colour takes the
+    place of the base where blocked="occluder" and nowhere else; composite_layers
+    hands the compositor the same (u, v, weight)."""
+    gb, _, _ = data("floor", 96, 72)
+    args = (gb["position"], gb["normal"], gb["specular"], gb["color"], gb["projection"])
+    kw = dict(glint_core.presets()["balanced"], resolution=1.0)
+    miss = glint_core.pipeline(*args, **kw)
+    occ = glint_core.pipeline(*args, **kw, blocked="occluder")
+    uv = occ["uv"]
+    occluder = (uv[..., 2] > 0) & (uv[..., 3] == 0)
+    assert occluder.sum() > 20
+    changed = np.abs(occ["combined"] - miss["combined"]).max(axis=-1) > 0
+    assert changed[occluder].mean() > 0.9 and not changed[~occluder].any()
+    # the occluder's texel colour, weighted by its visibility: its uv is the texel's
+    # centre, where the stage's bilinear read is that texel alone
+    h, w = uv.shape[:2]
+    ox = np.clip((uv[..., 0] * w).astype(int), 0, w - 1)
+    oy = np.clip((uv[..., 1] * h).astype(int), 0, h - 1)
+    want = gb["color"][oy, ox, :3] * uv[..., 2:3]
+    got = occ["reflection_color"][..., :3]
+    assert np.abs(got - want).max(axis=-1)[occluder].max() < 1e-5
+    layers = glint_core.composite_layers(gb["position"], gb["normal"], gb["specular"], gb["projection"],
+                                         **kw, blocked="occluder")
+    assert np.array_equal(layers["uv"][..., :3][occluder], uv[..., :3][occluder])
+

@@ -31,12 +31,22 @@ enum class BlurMode {
   Box,   // the book's fixed (2 size + 1)^2 box, mixed in by roughness
 };
 
+// What the hiz march reports for a ray that is blocked: one that meets a
+// surface inside its thickness, so that what it would hit is hidden behind it
+// (docs/marches.md, "Blocked rays").
+enum class Blocked {
+  Miss,      // nothing: (0, 0, 0, 0), the accuracy contract's answer (default)
+  Occluder,  // (u, v, weight, 0) at the occluder: the colour stages show what
+             // hides the hit; the 4th channel, the hit's own visibility, says none was found
+};
+
 struct TraceOptions {
   float max_distance = 15.0f;  // view-space units (Blender units): longest reflected ray
   float resolution = 0.3f;     // [0, 1]: share of the on-screen pixels the coarse pass visits
   int steps = 10;              // an iteration budget; its meaning per march is in marches.h
   float thickness = 0.5f;      // view-space units: how far behind a surface still counts as a hit
   March march = March::Seed;
+  Blocked blocked = Blocked::Miss;  // read by the hiz march only (marches.h)
   // MiB this call (a trace, or the whole pipeline) may allocate; 0: the default,
   // GLINT_MEMORY_LIMIT_MB or a share of physical memory (glint/memory.h).
   double memory_limit_mb = 0.0;
@@ -72,6 +82,8 @@ Weighting parse_weighting(const std::string& name);  // "physical" | "seed"
 const char* to_string(Weighting w);
 BlurMode parse_blur_mode(const std::string& name);  // "cone" | "box"
 const char* to_string(BlurMode b);
+Blocked parse_blocked(const std::string& name);  // "miss" | "occluder"
+const char* to_string(Blocked b);
 
 // Limits, public so that docs, bindings and tests quote the same numbers.
 constexpr int kMaxSteps = 1000000;

@@ -360,7 +360,19 @@ void march_hiz(const MarchSetup& s, const HizPlanes& planes, const HizPyramid& p
       float th;
       bool located;
       const TexelOutcome hit = texel_hit(s, planes, cam, back, r, i, j, t, te, th, located);
-      if (hit == TexelOutcome::Blocked) return;
+      if (hit == TexelOutcome::Blocked) {
+        // What hides the hit: the colour stages may show it in place of the
+        // sky (docs/marches.md, "Blocked rays"). The texel's centre, not where
+        // the ray entered it: a bilinear read on its edge would mix in the
+        // texel beside it, often another object.
+        if (s.opt.blocked != Blocked::Occluder) return;
+        const float u = (static_cast<float>(i) + 0.5f) / static_cast<float>(pos.width);
+        const float v = (static_cast<float>(j) + 0.5f) / static_cast<float>(pos.height);
+        out[0] = u;
+        out[1] = v;
+        out[2] = hit_visibility(u, v, true);
+        return;
+      }
       if (hit == TexelOutcome::Hit) {
         const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
         const float v = (r.f0[1] + th * r.d[1]) / static_cast<float>(pos.height);
@@ -447,8 +459,9 @@ namespace {
 // same smooth surface (reflective, normals within kReuseCos, view distances
 // within kReuseDepth of each other), and either all missed or all hit within
 // kReusePixels of each other. Then `out` is their miss, or their hits' mean
-// uv with the least visibility of them. False also where the pixel itself is
-// not reflective: its own trace writes its 0 then.
+// uv with each channel's least visibility (with blocked=occluder an occluder,
+// 0 in the 4th channel, counts as a hit). False also where the pixel itself
+// is not reflective: its own trace writes its 0 then.
 bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
                       float o[4]) {
   if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
@@ -476,7 +489,7 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   }
   if (hits < k) return false;
   const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
-  float su = 0.0f, sv = 0.0f, vis = 1.0f;
+  float su = 0.0f, sv = 0.0f, vis = 1.0f, found = 1.0f;
   for (int a = 0; a < k; ++a) {
     const float* ha = out.px(q[a][0], q[a][1]);
     for (int b = a + 1; b < k; ++b) {
@@ -487,11 +500,13 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
     su += ha[0];
     sv += ha[1];
     vis = std::min(vis, ha[2]);
+    found = std::min(found, ha[3]);
   }
   const float inv_k = 1.0f / static_cast<float>(k);
   o[0] = su * inv_k;
   o[1] = sv * inv_k;
-  o[2] = o[3] = vis;
+  o[2] = vis;
+  o[3] = found;
   return true;
 }
 

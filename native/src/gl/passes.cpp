@@ -52,6 +52,7 @@ Image GlState::trace(const TraceInputs& in, const TraceOptions& opt) {
     gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
     gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
     gl_.Uniform1i(loc(prog, "u_pass"), 0);
+    gl_.Uniform1i(loc(prog, "u_blocked"), opt.blocked == Blocked::Occluder ? 1 : 0);
     if (hiz_reuses_rays(opt)) return trace_reusing(prog, pos, nrm, spec, w, h, passes_textures);
   }
   return draw_and_read(w, h, info.name, passes_textures);
