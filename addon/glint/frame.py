@@ -21,6 +21,7 @@ def settings_dict(glint) -> dict:
         "max_distance": glint.max_distance, "resolution": glint.resolution, "steps": glint.steps,
         "thickness": glint.thickness, "march": glint.march_name, "preset": glint.preset_name,
         "backend": glint.backend, "debug_view": glint.debug_view, "write_layers_exr": glint.write_layers_exr,
+        "fill_hidden": glint.fill_hidden,
     }
 
 
@@ -112,7 +113,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         def attempt(size):
             """(position, normal, specular, layers) at ``size`` (None: the frame's),
             layers as ``core.composite_layers`` returns them; None when no pixel reflects."""
-            kw = dict(kwargs)
+            kw = dict(kwargs, **settings_logic.look_kwargs(values))
             with timings.measure("rasterize"):
                 gbuf, used = _with_backend(core, backend, requested,
                                            lambda b: rasterize(core, exp, b, back_layer, size))

@@ -136,6 +136,11 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
     thickness: _param("thickness", float, update=_on_compositor_setting)
     march: EnumProperty(name="March", items=_march_items, get=_get_march, set=_set_march,
                         update=_on_raw, description="How rays are marched in screen space")
+    fill_hidden: BoolProperty(
+        name="Fill Hidden Reflections", default=True,
+        description="Where a reflected ray passes behind an object, so that what it reflects is hidden "
+                    "from the camera, show the object in front (as Eevee's SSR does) instead of the "
+                    "world. Hi-Z march only")
     backend: EnumProperty(name="Backend", items=sl.BACKENDS, default="AUTO",
                           description="Where the G-buffer and the trace run")
     debug_view: EnumProperty(name="Debug View", items=cg.DEBUG_VIEWS, default="NONE",

@@ -85,6 +85,7 @@ class GLINT_PT_parameters(_GlintSubPanel, bpy.types.Panel):
         col.prop(glint, "resolution")
         col.prop(glint, "steps")
         layout.prop(glint, "march")
+        layout.prop(glint, "fill_hidden")
 
 
 class GLINT_PT_backend(_GlintSubPanel, bpy.types.Panel):

@@ -66,6 +66,8 @@ def test_trace_kwargs():
     assert kw == {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "seed"}
     with pytest.raises(ValueError, match="resolution"):
         s.trace_kwargs({"max_distance": 15, "resolution": 2.0, "steps": 10, "thickness": 0.5, "march": "SEED"})
+    assert s.look_kwargs({}) == {"blocked": "occluder"}
+    assert s.look_kwargs({"fill_hidden": False}) == {"blocked": "miss"}
     assert s.backend_name("AUTO") == "auto" and s.backend_name("GL") == "gl" and s.backend_name("CPU") == "cpu"
     with pytest.raises(ValueError):
         s.backend_name("VULKAN")

@@ -106,6 +106,15 @@ def trace_kwargs(values: Mapping[str, object], presets: Mapping[str, Mapping] = 
     return out
 
 
+def look_kwargs(values: Mapping[str, object]) -> Dict[str, str]:
+    """What ``glint_core.composite_layers`` takes beyond the trace's quality: what a
+    ray that passes behind an object shows. With ``fill_hidden`` (the default) it shows
+    the object in front, as Eevee's SSR does, instead of the engine's reflection of the
+    world (docs/addon.md, "Hidden reflections"). Not for measuring accuracy: an
+    occluder is not the hit."""
+    return {"blocked": "occluder" if values.get("fill_hidden", True) else "miss"}
+
+
 def backend_name(enum_value: str) -> str:
     """Panel enum -> the core's backend name."""
     names = {"AUTO": "auto", "GL": "gl", "CPU": "cpu"}
