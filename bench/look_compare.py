@@ -22,13 +22,19 @@ a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
       [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
-      [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor]
+      [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor] \\
+      [--cycles-cache DIR]
+
+--cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
+scene, size, samples, Blender and this script are the same: Cycles is most of a run's
+time and does not depend on Glint, so comparing Glint's changes needs it once.
 
 The add-on is registered from this checkout (or --addon); the core comes from
 GLINT_CORE_PATH (default: <checkout>/build/python).
 """
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import statistics
@@ -73,10 +79,11 @@ def _args():
     return kit.script_options(
         {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
          "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
-         "scenes": list(SCENES)},
+         "scenes": list(SCENES), "cycles-cache": ""},
         {"size": _at_least(kit.frame_size, 8, "size"), "cycles-samples": _at_least(int, 2, "cycles-samples"),
          "eevee-samples": _at_least(int, 2, "eevee-samples"), "rounds": _at_least(int, 1, "rounds"),
-         "threshold": float, "out": os.path.abspath, "addon": os.path.abspath, "scenes": _scene_names})
+         "threshold": float, "out": os.path.abspath, "addon": os.path.abspath, "scenes": _scene_names,
+         "cycles-cache": os.path.abspath})
 
 
 _register_addon = kit.register_addon
@@ -359,11 +366,32 @@ def write_png(path, display):
         bpy.data.images.remove(img)
 
 
+def cycles_frames(name, scene, meshes, opts, tmp):
+    """The two seeds' (with, without) pairs, from --cycles-cache when it has them.
+    The key holds everything the frames depend on: the scene, size and samples,
+    Blender's build, and this file (which builds the scenes and sets Cycles up)."""
+    path = None
+    if opts["cycles-cache"]:
+        with open(__file__, "rb") as f:
+            script = hashlib.sha1(f.read()).hexdigest()[:12]
+        w, h = opts["size"]
+        key = f"{name}_{w}x{h}_{opts['cycles-samples']}_{bpy.app.version_string}_{bpy.app.build_hash.decode()}_{script}"
+        path = os.path.join(opts["cycles-cache"], key.replace(" ", "-") + ".npz")
+        if os.path.exists(path):
+            z = np.load(path)
+            return z["with_a"], z["without_a"], z["with_b"], z["without_b"]
+    with_a, without_a = cycles_pair(scene, meshes, 1, tmp)
+    with_b, without_b = cycles_pair(scene, meshes, 2, tmp)
+    if path:
+        os.makedirs(opts["cycles-cache"], exist_ok=True)
+        np.savez(path, with_a=with_a, without_a=without_a, with_b=with_b, without_b=without_b)
+    return with_a, without_a, with_b, without_b
+
+
 def run_scene(name, opts, state, tmp):
     scene, reflectors, meshes = build_scene(name, opts)
     t0 = time.perf_counter()
-    with_a, without_a = cycles_pair(scene, meshes, 1, tmp)
-    with_b, without_b = cycles_pair(scene, meshes, 2, tmp)
+    with_a, without_a, with_b, without_b = cycles_frames(name, scene, meshes, opts, tmp)
     cycles_s = time.perf_counter() - t0
     c_a, c_b = with_a - without_a, with_b - without_b
     c = (c_a + c_b) / 2
