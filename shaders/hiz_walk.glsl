@@ -3,8 +3,8 @@
 // march_hiz() in native/src/cpu/march_hiz.cpp, which explains each step;
 // same operations in the same order. trace_pixel() returns (u, v, visibility,
 // visibility) at a hit (its confidence times the fade at the screen's edge),
-// else 0. Apart from trace_hiz.frag's main() so that another stage can walk
-// a pixel it picks.
+// else 0. Apart from trace_hiz.frag's main() so that trace_hiz_list.comp
+// can walk the pixels it picks from a list.
 // Needs common.glsl, trace_common.glsl and hiz_common.glsl.
 
 uniform sampler2D u_pyramid;  // RG32F, full mip chain: (nearest, farthest + thickness)

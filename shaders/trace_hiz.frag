@@ -8,11 +8,7 @@
 
 // hiz_reuses_rays() (glint/marches.h): 0 traces each pixel; 1 traces pixel
 // (2x, 2y) into a half-size target, which trace_hiz_fill.frag then spreads.
-// The depth test runs first so that the pixels the fill pass settled (it
-// marks them nearer) never start this program: a SIMD rasterizer then skips
-// whole blocks of them instead of running the walk's set-up masked off.
 uniform int u_pass;
-layout(early_fragment_tests) in;
 
 layout(location = 0) out vec4 out_uv;
 

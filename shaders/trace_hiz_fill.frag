@@ -3,11 +3,12 @@
 // native/src/cpu/march_hiz.cpp, same operations in the same order): every
 // pixel of the frame, after trace_hiz.frag traced every other pixel of every
 // other row into u_coarse. A traced pixel is copied; another takes what its
-// traced neighbours agree on. Where they do not, it writes depth 1 (else 0),
-// so that trace_hiz.frag, drawn next at depth 0.5 with GL_LESS, runs there only.
+// traced neighbours agree on. Where they do not, the pixel is appended to the
+// list of hiz_rays.glsl, which trace_hiz_list.comp traces, and left unwritten.
 #include "common.glsl"
 #include "fragment.glsl"
 #include "trace_common.glsl"
+#include "hiz_rays.glsl"
 
 uniform sampler2D u_coarse;  // RGBA32F, (w + 1) / 2 x (h + 1) / 2: pixel (2x, 2y)'s result
 
@@ -72,7 +73,6 @@ bool reuse_neighbours(ivec2 c, ivec2 q[4], int k, out vec4 o) {
 void main() {
   ivec2 c = pixel_coord();
   out_uv = vec4(0.0);
-  gl_FragDepth = 0.0;
   if ((c.x & 1) == 0 && (c.y & 1) == 0) {
     out_uv = coarse(c);
     return;
@@ -99,5 +99,8 @@ void main() {
     out_uv = o;
     return;
   }
-  gl_FragDepth = 1.0;  // left to trace_hiz.frag
+  // Left to trace_hiz_list.comp, which writes the pixel: discarded here so
+  // that no framebuffer write races its image store.
+  pixel[atomicAdd(count, 1u)] = uint(c.x) | uint(c.y) << 16;
+  discard;
 }

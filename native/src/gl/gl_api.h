@@ -67,6 +67,11 @@ namespace glint::gl {
   X(PFNGLBINDBUFFERPROC, BindBuffer)                                   \
   X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                           \
   X(PFNGLBUFFERDATAPROC, BufferData)                                   \
+  X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                             \
+  X(PFNGLDISPATCHCOMPUTEPROC, DispatchCompute)                         \
+  X(PFNGLDISPATCHCOMPUTEINDIRECTPROC, DispatchComputeIndirect)         \
+  X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)                             \
+  X(PFNGLBINDIMAGETEXTUREPROC, BindImageTexture)                       \
   X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer)                 \
   X(PFNGLVERTEXATTRIBIPOINTERPROC, VertexAttribIPointer)               \
   X(PFNGLENABLEVERTEXATTRIBARRAYPROC, EnableVertexAttribArray)         \
