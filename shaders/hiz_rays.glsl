@@ -1,5 +1,5 @@
 // The list of pixels the hiz march's reuse of rays left to trace: appended by
-// trace_hiz_fill.frag, sized for the dispatch by hiz_rays_args.comp, walked by
+// trace_hiz_fill.comp, sized for the dispatch by hiz_rays_args.comp, walked by
 // trace_hiz_list.comp. The first three words are glDispatchComputeIndirect's
 // arguments, so the dispatch is sized on the GPU without a read-back. The
 // host resets the first four words to (0, 1, 1, 0) before the fill pass.

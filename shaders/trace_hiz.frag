@@ -7,7 +7,7 @@
 #include "hiz_walk.glsl"
 
 // hiz_reuses_rays() (glint/marches.h): 0 traces each pixel; 1 traces pixel
-// (2x, 2y) into a half-size target, which trace_hiz_fill.frag then spreads.
+// (2x, 2y) into a half-size target, which trace_hiz_fill.comp then spreads.
 uniform int u_pass;
 
 layout(location = 0) out vec4 out_uv;

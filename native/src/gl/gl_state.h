@@ -58,7 +58,7 @@ class GlState {
                       const Texture& nrm, const Texture* spec, const Texture* back);
 
   // The hiz march reusing rays (hiz_reuses_rays()): `prog` (trace_hiz.frag)
-  // traces a quarter of the pixels, trace_hiz_fill.frag spreads them and
+  // traces a quarter of the pixels, trace_hiz_fill.comp spreads them and
   // lists the pixels where they disagree (hiz_rays.glsl), hiz_rays_args.comp
   // sizes the dispatch and `list` (trace_hiz_list.comp) traces the listed
   // pixels, a ray per lane. Both programs have every uniform set. One

@@ -77,10 +77,12 @@ Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const
   const Texture& quarter = target(kCoarse, cw, ch, pass, textures + 2);
   attach(quarter);
   draw(cw, ch);
-  // 2. Every pixel: the quarter spread where it agrees; the rest listed.
+  // 2. Every 2x2 quad: the quarter spread where it agrees; the rest listed.
+  const Texture& out = target(kOut, w, h, pass, textures + 2);
   const GLuint rays = hiz_ray_list(w, h);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rays);
-  const GLuint fill = program("trace_hiz_fill.frag");
+  gl_.BindImageTexture(0, out.id, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  const GLuint fill = program("trace_hiz_fill.comp");
   gl_.UseProgram(fill);
   bind(fill, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(fill, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -88,20 +90,18 @@ Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const
   gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
   gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
   bind(fill, "u_coarse", 7, quarter, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  const Texture& out = target(kOut, w, h, pass, textures + 2);
-  attach(out);
-  draw(w, h);
+  gl_.DispatchCompute(static_cast<GLuint>((cw + 7) / 8), static_cast<GLuint>((ch + 7) / 8), 1);
   // 3. The dispatch's size from the list's length, on the GPU: no read-back.
   gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   gl_.UseProgram(program("hiz_rays_args.comp"));
   gl_.DispatchCompute(1, 1, 1);
-  // 4. The listed pixels' walks, written straight into the frame.
+  // 4. The listed pixels' walks, written into the frame beside the fill's.
   gl_.MemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   gl_.UseProgram(list);
-  gl_.BindImageTexture(0, out.id, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   gl_.BindBuffer(GL_DISPATCH_INDIRECT_BUFFER, rays);
   gl_.DispatchComputeIndirect(0);
   gl_.MemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+  attach(out);
   debug_check(pass);
   return read(w, h, GL_COLOR_ATTACHMENT0, pass);
 }
