@@ -11,6 +11,7 @@ namespace glint::gl {
   X(PFNGLGETERRORPROC, GetError)                                       \
   X(PFNGLGETSTRINGPROC, GetString)                                     \
   X(PFNGLGETINTEGERVPROC, GetIntegerv)                                 \
+  X(PFNGLGETINTEGER64VPROC, GetInteger64v)                             \
   X(PFNGLFINISHPROC, Finish)                                           \
   X(PFNGLGENTEXTURESPROC, GenTextures)                                 \
   X(PFNGLDELETETEXTURESPROC, DeleteTextures)                           \

@@ -184,7 +184,20 @@ GLuint GlState::program(const std::string& frag, const char* vert) {
 }
 
 GLuint GlState::hiz_ray_list(int w, int h) {
-  const size_t bytes = (4 + static_cast<size_t>(w) * static_cast<size_t>(h)) * sizeof(GLuint);
+  // The traced quarter is never listed: room for the other pixels only.
+  const size_t all = static_cast<size_t>(w) * static_cast<size_t>(h);
+  const size_t quarter = static_cast<size_t>((w + 1) / 2) * static_cast<size_t>((h + 1) / 2);
+  const size_t bytes = (4 + all - quarter) * sizeof(GLuint);
+  // A shader sees at most GL_MAX_SHADER_STORAGE_BLOCK_SIZE bytes of the
+  // buffer (2^24 at the least; llvmpipe 2^27, enough for 8K): past it the
+  // list would be cut silently, so the frame is refused, as check_size() does.
+  GLint64 limit = 0;
+  gl_.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &limit);
+  if (limit > 0 && bytes > static_cast<size_t>(limit))
+    throw Error("glint GL: " + size_text(w, h) + " is too large for the hiz march's reuse of rays on " +
+                info().renderer + ": its list of rays needs " + mib(double(bytes)) +
+                " MiB, GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " + mib(double(limit)) +
+                " MiB. Use resolution above 0.5 or backend=\"cpu\" for this size.");
   if (!hiz_rays_) gl_.GenBuffers(1, &hiz_rays_);
   gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, hiz_rays_);
   if (bytes > hiz_rays_bytes_) {
