@@ -11,6 +11,7 @@ namespace glint::gl {
   X(PFNGLGETERRORPROC, GetError)                                       \
   X(PFNGLGETSTRINGPROC, GetString)                                     \
   X(PFNGLGETINTEGERVPROC, GetIntegerv)                                 \
+  X(PFNGLGETINTEGER64VPROC, GetInteger64v)                             \
   X(PFNGLFINISHPROC, Finish)                                           \
   X(PFNGLGENTEXTURESPROC, GenTextures)                                 \
   X(PFNGLDELETETEXTURESPROC, DeleteTextures)                           \
@@ -67,6 +68,11 @@ namespace glint::gl {
   X(PFNGLBINDBUFFERPROC, BindBuffer)                                   \
   X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                           \
   X(PFNGLBUFFERDATAPROC, BufferData)                                   \
+  X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                             \
+  X(PFNGLDISPATCHCOMPUTEPROC, DispatchCompute)                         \
+  X(PFNGLDISPATCHCOMPUTEINDIRECTPROC, DispatchComputeIndirect)         \
+  X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)                             \
+  X(PFNGLBINDIMAGETEXTUREPROC, BindImageTexture)                       \
   X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer)                 \
   X(PFNGLVERTEXATTRIBIPOINTERPROC, VertexAttribIPointer)               \
   X(PFNGLENABLEVERTEXATTRIBARRAYPROC, EnableVertexAttribArray)         \

@@ -52,12 +52,19 @@ class GlState {
   void build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
                      const Texture& nrm, const Texture* back);
 
-  // The hiz march reusing rays (hiz_reuses_rays()): `prog` (trace_hiz.frag,
-  // every uniform set) traces a quarter of the pixels, trace_hiz_fill.frag
-  // spreads them and marks in a depth buffer where they disagree, and `prog`
-  // runs again only there. One read-back, at the end.
-  Image trace_reusing(GLuint prog, const Texture& pos, const Texture& nrm, const Texture* spec, int w, int h,
-                      int textures);
+  // Every uniform of the trace program `prog` (a march's, or
+  // trace_hiz_list.comp), on the texture units trace() binds.
+  void trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
+                      const Texture& nrm, const Texture* spec, const Texture* back);
+
+  // The hiz march reusing rays (hiz_reuses_rays()): `prog` (trace_hiz.frag)
+  // traces a quarter of the pixels, trace_hiz_fill.comp spreads them and
+  // lists the pixels where they disagree (hiz_rays.glsl), hiz_rays_args.comp
+  // sizes the dispatch and `list` (trace_hiz_list.comp) traces the listed
+  // pixels, a ray per lane. Both programs have every uniform set. One
+  // read-back, at the end.
+  Image trace_reusing(GLuint prog, GLuint list, const Texture& pos, const Texture& nrm, const Texture* spec,
+                      int w, int h, int textures);
 
   // The uniforms hiz_common.glsl declares.
   void bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back);
@@ -139,8 +146,8 @@ class GlState {
 
   void bind(GLuint prog, const char* sampler, int unit, const Texture& t, GLint filter, GLint wrap);
 
-  // `vert` + `frag`, compiled on first use and kept (every fragment shader
-  // is used with one vertex shader only).
+  // `vert` + `frag`, or a compute shader (.comp) alone, compiled on first use
+  // and kept (every fragment shader is used with one vertex shader only).
   GLuint program(const std::string& frag, const char* vert = "fullscreen.vert");
 
   void attach(const Texture& t);
@@ -191,7 +198,12 @@ class GlState {
   // `images` size the checks and the out-of-memory error; `name` the others.
   void mip_target(Pyramid& t, int w, int h, GLenum format, const char* stage, int images, const char* name);
   Texture env_brdf_;
-  Texture reuse_depth_;  // DEPTH32F, frame-sized: where trace_reusing() traces again
+  // hiz_rays.glsl's list for a w x h frame, with room for every pixel,
+  // bound as GL_SHADER_STORAGE_BUFFER with its header reset; kept between
+  // frames, grown when a larger one needs it.
+  GLuint hiz_ray_list(int w, int h);
+  GLuint hiz_rays_ = 0;
+  size_t hiz_rays_bytes_ = 0;
   std::map<std::string, GLuint> programs_;
 };
 

@@ -25,6 +25,18 @@ Image GlState::trace(const TraceInputs& in, const TraceOptions& opt) {
                             : nullptr;
   if (info.id == March::Hiz) build_pyramid(in, opt, pos, nrm, back);
   const GLuint prog = program(info.gl_program);
+  trace_uniforms(prog, in, opt, pos, nrm, spec, back);
+  if (hiz_reuses_rays(opt)) {
+    const GLuint list = program("trace_hiz_list.comp");
+    trace_uniforms(list, in, opt, pos, nrm, spec, back);
+    return trace_reusing(prog, list, pos, nrm, spec, w, h, passes_textures);
+  }
+  gl_.UseProgram(prog);
+  return draw_and_read(w, h, info.name, passes_textures);
+}
+
+void GlState::trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
+                             const Texture& nrm, const Texture* spec, const Texture* back) {
   gl_.UseProgram(prog);
   bind(prog, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(prog, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -39,37 +51,39 @@ Image GlState::trace(const TraceInputs& in, const TraceOptions& opt) {
   const CameraEye eye = camera_eye(in.projection);
   gl_.Uniform1i(loc(prog, "u_eye_kind"), static_cast<int>(eye.kind));
   gl_.Uniform3f(loc(prog, "u_eye"), eye.eye[0], eye.eye[1], eye.eye[2]);
-  gl_.Uniform2f(loc(prog, "u_size"), static_cast<float>(w), static_cast<float>(h));
+  gl_.Uniform2f(loc(prog, "u_size"), static_cast<float>(in.position.width),
+                static_cast<float>(in.position.height));
   gl_.Uniform1f(loc(prog, "u_max_distance"), opt.max_distance);
   gl_.Uniform1f(loc(prog, "u_thickness"), opt.thickness);
   gl_.Uniform1i(loc(prog, "u_steps"), opt.steps);
   const float r = opt.resolution;
   gl_.Uniform1f(loc(prog, "u_resolution"), r < 0.0f ? 0.0f : (r > 1.0f ? 1.0f : r));
-  if (info.id == March::Hiz) {
-    bind_hiz_inputs(prog, in, pos, back);
-    gl_.ActiveTexture(GL_TEXTURE0 + 4);
-    gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
-    gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
-    gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
-    gl_.Uniform1i(loc(prog, "u_pass"), 0);
-    gl_.Uniform1i(loc(prog, "u_blocked"), opt.blocked == Blocked::Occluder ? 1 : 0);
-    if (hiz_reuses_rays(opt)) return trace_reusing(prog, pos, nrm, spec, w, h, passes_textures);
-  }
-  return draw_and_read(w, h, info.name, passes_textures);
+  if (opt.march != March::Hiz) return;
+  bind_hiz_inputs(prog, in, pos, back);
+  gl_.ActiveTexture(GL_TEXTURE0 + 4);
+  gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
+  gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
+  gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
+  gl_.Uniform1i(loc(prog, "u_pass"), 0);
+  gl_.Uniform1i(loc(prog, "u_blocked"), opt.blocked == Blocked::Occluder ? 1 : 0);
 }
 
-Image GlState::trace_reusing(GLuint prog, const Texture& pos, const Texture& nrm, const Texture* spec, int w,
-                             int h, int textures) {
+Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const Texture& nrm,
+                             const Texture* spec, int w, int h, int textures) {
   const char* pass = "hiz";
   // 1. Pixel (2x, 2y) of the frame into pixel (x, y) of a half-size target.
+  gl_.UseProgram(prog);
   gl_.Uniform1i(loc(prog, "u_pass"), 1);
   const int cw = (w + 1) / 2, ch = (h + 1) / 2;
   const Texture& quarter = target(kCoarse, cw, ch, pass, textures + 2);
   attach(quarter);
   draw(cw, ch);
-  // 2. Every pixel: the quarter spread where it agrees; depth 1 elsewhere.
-  sized(reuse_depth_, w, h, GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT, "DEPTH32F", pass, textures + 2);
-  const GLuint fill = program("trace_hiz_fill.frag");
+  // 2. Every 2x2 quad: the quarter spread where it agrees; the rest listed.
+  const Texture& out = target(kOut, w, h, pass, textures + 2);
+  const GLuint rays = hiz_ray_list(w, h);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rays);
+  gl_.BindImageTexture(0, out.id, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  const GLuint fill = program("trace_hiz_fill.comp");
   gl_.UseProgram(fill);
   bind(fill, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(fill, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
@@ -77,22 +91,18 @@ Image GlState::trace_reusing(GLuint prog, const Texture& pos, const Texture& nrm
   gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
   gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
   bind(fill, "u_coarse", 7, quarter, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  const Texture& out = target(kOut, w, h, pass, textures + 2);
+  gl_.DispatchCompute(static_cast<GLuint>((cw + 7) / 8), static_cast<GLuint>((ch + 7) / 8), 1);
+  // 3. The dispatch's size from the list's length, on the GPU: no read-back.
+  gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  gl_.UseProgram(program("hiz_rays_args.comp"));
+  gl_.DispatchCompute(1, 1, 1);
+  // 4. The listed pixels' walks, written into the frame beside the fill's.
+  gl_.MemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  gl_.UseProgram(list);
+  gl_.BindBuffer(GL_DISPATCH_INDIRECT_BUFFER, rays);
+  gl_.DispatchComputeIndirect(0);
+  gl_.MemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
   attach(out);
-  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, reuse_depth_.id, 0);
-  gl_.Enable(GL_DEPTH_TEST);
-  gl_.DepthMask(GL_TRUE);
-  gl_.DepthFunc(GL_ALWAYS);
-  draw(w, h);
-  // 3. The walk again, where the depth test lets it (the triangle lies at 0.5).
-  gl_.UseProgram(prog);
-  gl_.Uniform1i(loc(prog, "u_pass"), 0);
-  gl_.DepthMask(GL_FALSE);
-  gl_.DepthFunc(GL_LESS);
-  draw(w, h);
-  gl_.Disable(GL_DEPTH_TEST);
-  gl_.DepthMask(GL_TRUE);
-  gl_.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, 0, 0);
   debug_check(pass);
   return read(w, h, GL_COLOR_ATTACHMENT0, pass);
 }

@@ -24,7 +24,7 @@ GlState::~GlState() {
   if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
   if (cone_chain_.id) gl_.DeleteTextures(1, &cone_chain_.id);
   release(env_brdf_);
-  release(reuse_depth_);
+  if (hiz_rays_) gl_.DeleteBuffers(1, &hiz_rays_);
   release_raster();
   gl_.DeleteFramebuffers(1, &fbo_);
   gl_.DeleteVertexArrays(1, &empty_vao_);
@@ -177,9 +177,48 @@ void GlState::bind(GLuint prog, const char* sampler, int unit, const Texture& t,
 GLuint GlState::program(const std::string& frag, const char* vert) {
   auto it = programs_.find(frag);
   if (it != programs_.end()) return it->second;
-  const GLuint p = link_program(gl_, {vert, frag});
+  const bool compute = frag.size() > 5 && frag.compare(frag.size() - 5, 5, ".comp") == 0;
+  const GLuint p = compute ? link_program(gl_, {frag}) : link_program(gl_, {vert, frag});
   programs_[frag] = p;
   return p;
+}
+
+GLuint GlState::hiz_ray_list(int w, int h) {
+  // The traced quarter is never listed: room for the other pixels only.
+  const size_t all = static_cast<size_t>(w) * static_cast<size_t>(h);
+  const size_t quarter = static_cast<size_t>((w + 1) / 2) * static_cast<size_t>((h + 1) / 2);
+  const size_t bytes = (4 + all - quarter) * sizeof(GLuint);
+  // A shader sees at most GL_MAX_SHADER_STORAGE_BLOCK_SIZE bytes of the
+  // buffer (2^24 at the least; llvmpipe 2^27, enough for 8K): past it the
+  // list would be cut silently, so the frame is refused, as check_size() does.
+  GLint64 limit = 0;
+  gl_.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &limit);
+  if (limit > 0 && bytes > static_cast<size_t>(limit))
+    throw Error("glint GL: " + size_text(w, h) + " is too large for the hiz march's reuse of rays on " +
+                info().renderer + ": its list of rays needs " + mib(double(bytes)) +
+                " MiB, GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " + mib(double(limit)) +
+                " MiB. Use resolution above 0.5 or backend=\"cpu\" for this size.");
+  if (!hiz_rays_) gl_.GenBuffers(1, &hiz_rays_);
+  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, hiz_rays_);
+  if (bytes > hiz_rays_bytes_) {
+    while (gl_.GetError() != GL_NO_ERROR) {
+    }
+    gl_.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(bytes), nullptr, GL_DYNAMIC_COPY);
+    const GLenum err = gl_.GetError();
+    if (err != GL_NO_ERROR) {
+      hiz_rays_bytes_ = 0;
+      if (err == GL_OUT_OF_MEMORY)
+        throw Error("glint GL: out of memory: the hiz march's list of rays for " + size_text(w, h) +
+                    " needs " + mib(double(bytes)) + " MiB (GL_OUT_OF_MEMORY on " + info().renderer + ")");
+      throw Error(std::string("glint GL: allocating the hiz march's list of rays failed: ") +
+                  gl_error_name(err));
+    }
+    hiz_rays_bytes_ = bytes;
+  }
+  // groups_x, groups_y, groups_z, count (hiz_rays.glsl).
+  const GLuint header[4] = {0, 1, 1, 0};
+  gl_.BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof header, header);
+  return hiz_rays_;
 }
 
 void GlState::attach(const Texture& t) {

@@ -1,0 +1,308 @@
+// The "hiz" march's walk: the Hi-Z pyramid (hiz_base.frag, hiz_reduce.frag)
+// walked cell by cell along the reflected ray's screen-space line. A port of
+// march_hiz() in native/src/cpu/march_hiz.cpp, which explains each step;
+// same operations in the same order. trace_pixel() returns (u, v, visibility,
+// visibility) at a hit (its confidence times the fade at the screen's edge),
+// with u_blocked an occluder's (u, v, fade, 0), else 0. Apart from
+// trace_hiz.frag's main() so that trace_hiz_list.comp can walk the pixels it
+// picks from a list.
+// Needs common.glsl, trace_common.glsl and hiz_common.glsl.
+
+uniform sampler2D u_pyramid;  // RG32F, full mip chain: (nearest, farthest + thickness)
+uniform int u_levels;
+// TraceOptions::blocked: 1 (occluder) reports a blocked ray at the texel that
+// blocks it as (u, v, edge fade, 0); 0 (miss) reports nothing.
+uniform int u_blocked;
+
+// The ray, in the homogeneous form of the CPU's Ray: at screen fraction t
+// the view point is A(t) / B(t).
+vec2 g_f0, g_d, g_inv, g_nudge;
+vec3 g_a0, g_da;
+float g_b0, g_db, g_t_end;
+
+float ray_depth(float t) {
+  precise float r = -(g_a0.z + t * g_da.z) / (g_b0 + t * g_db);
+  return r;
+}
+// ray_depth(t) = ray_num(t) / ray_b(t), ray_b > 0: the walk compares without dividing.
+float ray_num(float t) {
+  precise float r = -(g_a0.z + t * g_da.z);
+  return r;
+}
+float ray_b(float t) {
+  precise float r = g_b0 + t * g_db;
+  return r;
+}
+float ray_plane(float t, vec3 u, float np) {
+  precise float r = u.x * (g_a0.x + t * g_da.x) + u.y * (g_a0.y + t * g_da.y) +
+                    u.z * (g_a0.z + t * g_da.z) - np * (g_b0 + t * g_db);
+  return r;
+}
+float ray_exit(ivec4 box) {
+  float te = g_t_end;
+  if (g_d.x != 0.0) {
+    precise float v = (float(g_d.x > 0.0 ? box.z : box.x) - g_f0.x) * g_inv.x;
+    te = v < te ? v : te;
+  }
+  if (g_d.y != 0.0) {
+    precise float v = (float(g_d.y > 0.0 ? box.w : box.y) - g_f0.y) * g_inv.y;
+    te = v < te ? v : te;
+  }
+  return te;
+}
+
+// Ray::left_levels() in march_hiz.cpp: bits 0..m for the largest level m
+// whose cells the sides of box crossed at te bound (b ^ (b - 1) for a side at
+// b: bits 0..ctz(b), all for 0); 0 when te is no side's.
+uint left_levels(ivec4 box, float te) {
+  uint left = 0u;
+  if (g_d.x != 0.0) {
+    int b = g_d.x > 0.0 ? box.z : box.x;
+    precise float v = (float(b) - g_f0.x) * g_inv.x;
+    left |= v == te ? uint(b ^ (b - 1)) : 0u;
+  }
+  if (g_d.y != 0.0) {
+    int b = g_d.y > 0.0 ? box.w : box.y;
+    precise float v = (float(b) - g_f0.y) * g_inv.y;
+    left |= v == te ? uint(b ^ (b - 1)) : 0u;
+  }
+  return left;
+}
+
+bool make_ray(ivec2 px) {
+  vec3 from, unit_from, normal;
+  if (!read_origin(px, from, unit_from, normal)) return false;
+  vec3 dir = normalize3(reflect3(unit_from, normal));
+  if (!finite_v3(dir)) return false;
+  float len = clipped_length(from, dir, u_max_distance);
+  if (!(len > 0.0)) return false;
+  precise vec3 end = from + dir * len;
+  vec4 c0 = clip_of(from);
+  vec4 c1 = clip_of(end);
+  if (!(c0.w > 0.0) || !(c1.w > 0.0)) return false;
+  // One reciprocal of w per end serves the projection and A, B alike.
+  precise float b0 = 1.0 / c0.w;
+  precise float b1 = 1.0 / c1.w;
+  precise float f0x = (c0.x * b0 * 0.5 + 0.5) * u_size.x;
+  precise float f0y = (c0.y * b0 * 0.5 + 0.5) * u_size.y;
+  precise float dx = (c1.x * b1 * 0.5 + 0.5) * u_size.x - f0x;
+  precise float dy = (c1.y * b1 * 0.5 + 0.5) * u_size.y - f0y;
+  g_f0 = vec2(f0x, f0y);
+  g_d = vec2(dx, dy);
+  if (!finite_f(f0x) || !finite_f(f0y) || !finite_f(dx) || !finite_f(dy)) return false;
+  g_inv = vec2(g_d.x != 0.0 ? 1.0 / g_d.x : 0.0, g_d.y != 0.0 ? 1.0 / g_d.y : 0.0);
+  g_nudge = vec2(g_d.x > 0.0 ? CELL_NUDGE : (g_d.x < 0.0 ? -CELL_NUDGE : 0.0),
+                 g_d.y > 0.0 ? CELL_NUDGE : (g_d.y < 0.0 ? -CELL_NUDGE : 0.0));
+  g_b0 = b0;
+  precise float db = b1 - b0;
+  g_db = db;
+  precise vec3 a0 = from * b0;
+  g_a0 = a0;
+  precise vec3 da = end * b1 - a0;
+  g_da = da;
+  g_t_end = 1.0;
+  g_t_end = ray_exit(ivec4(0, 0, int(u_size.x), int(u_size.y)));
+  return g_t_end > 0.0;
+}
+
+ivec2 cell_at(int level, float t, ivec2 size) {
+  precise float px = g_f0.x + t * g_d.x + g_nudge.x;
+  precise float py = g_f0.y + t * g_d.y + g_nudge.y;
+  // 2^-level from its exponent bits: exactly 1 / 2^level, without a division
+  // per step.
+  float scale = uintBitsToFloat(uint(127 - level) << 23);
+  precise float sx = px * scale;
+  precise float sy = py * scale;
+  int i = !(sx > 0.0) ? 0 : (sx >= float(size.x) ? size.x - 1 : int(sx));
+  int j = !(sy > 0.0) ? 0 : (sy >= float(size.y) ? size.y - 1 : int(sy));
+  return ivec2(i, j);
+}
+
+ivec4 cell_bounds(int level, ivec2 c, ivec2 size) {
+  return ivec4(c.x << level, c.y << level,
+               c.x == size.x - 1 ? int(u_size.x) : (c.x + 1) << level,
+               c.y == size.y - 1 ? int(u_size.y) : (c.y + 1) << level);
+}
+
+const int PASS = 0;
+const int HIT = 1;
+const int BLOCKED = 2;
+
+// n, p: the texel's plane normal (u_planes) and position, for the outline test after a hit.
+int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, out vec3 n, out vec3 p) {
+  n = texelFetch(u_planes, c, 0).xyz;
+  p = texelFetch(u_position, c, 0).xyz;
+  t_hit = ta;
+  located = false;
+  if (!normal_usable(n)) return HIT;
+  precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  precise vec3 u = vec3(n.x * inv, n.y * inv, n.z * inv);
+  precise float np = u.x * p.x + u.y * p.y + u.z * p.z;
+  precise float tol = PLANE_TOLERANCE * sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  float ga = ray_plane(ta, u, np);
+  float gb = ray_plane(tb, u, np);
+  precise float lim_a = -tol * ray_b(ta);
+  precise float lim_b = -tol * ray_b(tb);
+  bool a_behind = ga < lim_a;
+  bool b_behind = gb < lim_b;
+  if (!a_behind && !b_behind) return PASS;
+  if (!a_behind) {
+    precise float f = ga / (ga - gb);
+    f = f < 0.0 ? 0.0 : f;
+    f = 1.0 < f ? 1.0 : f;
+    precise float th = ta + (tb - ta) * f;
+    t_hit = th;
+    located = true;
+    return HIT;
+  }
+  vec4 L;
+  if (!texel_plane(n, p, L)) return HIT;
+  float thick = texel_thickness(c, -p.z);
+  precise float sxs = 2.0 / u_size.x;
+  precise float sys = 2.0 / u_size.y;
+  precise float slack = BEHIND_SLACK * abs(p.z);
+  precise float sxa = (g_f0.x + ta * g_d.x) * sxs - 1.0;
+  precise float sya = (g_f0.y + ta * g_d.y) * sys - 1.0;
+  precise float da = ray_depth(ta) - plane_depth(L, sxa, sya);
+  if (da <= slack) {
+    located = true;
+    return HIT;
+  }
+  if (da <= thick) return BLOCKED;
+  if (b_behind) {
+    precise float sxb = (g_f0.x + tb * g_d.x) * sxs - 1.0;
+    precise float syb = (g_f0.y + tb * g_d.y) * sys - 1.0;
+    precise float db = ray_depth(tb) - plane_depth(L, sxb, syb);
+    if (db <= thick) return BLOCKED;
+  }
+  return PASS;
+}
+
+// on_outline() and hit_visibility() in march_hiz.cpp.
+bool on_outline(ivec2 c, vec3 p, vec3 n) {
+  float th = texel_thickness(c, -p.z);
+  precise float lim = -th * sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  ivec2 nb[4] = ivec2[4](c - ivec2(1, 0), c + ivec2(1, 0), c - ivec2(0, 1), c + ivec2(0, 1));
+  bool outline = false;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 q = nb[k];
+    if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) continue;
+    vec4 o = texelFetch(u_position, q, 0);
+    precise float g = n.x * (o.x - p.x) + n.y * (o.y - p.y) + n.z * (o.z - p.z);
+    if (!texel_seen(o) || g < lim) outline = true;
+  }
+  return outline;
+}
+
+float hit_visibility(float u, float v, bool certain) {
+  precise float edge = min(min(u, 1.0 - u), min(v, 1.0 - v));
+  precise float fade = edge / EDGE_FADE;
+  fade = fade < 0.0 ? 0.0 : fade;
+  fade = 1.0 < fade ? 1.0 : fade;
+  precise float vis = (certain ? 1.0 : UNCERTAIN) * fade;
+  return vis;
+}
+
+// march_hiz(): the pixel's own ray walked to its hit.
+vec4 trace_pixel(ivec2 origin) {
+  if (!make_ray(origin)) return vec4(0.0);
+  int top = u_levels - 1;
+  int budget = u_steps * u_levels;
+  float t = ray_exit(ivec4(origin, origin + 1));
+  float nt = ray_num(t);
+  float bt = ray_b(t);
+  int level = 0;
+  // Bit l: the cell of level l the ray is in is known to overlap it
+  // (march_hiz() says why).
+  uint known = 0u;
+  int it = 0;
+  bool hit = false;
+  bool blocked = false;
+  ivec2 hit_c;
+  float hit_t;
+  bool hit_located;
+  vec3 hit_n, hit_p;
+  // The walk stops at each level-0 texel that may meet the ray and the
+  // texel's test runs outside the walk's loop: a SIMD rasterizer such as
+  // llvmpipe runs the body of a loop for all lanes whenever any lane needs
+  // it, so inside, the test (three fetches and the divisions) would cost
+  // every step of the walk instead of the one or two texels a ray tests.
+  while (it < budget && t < g_t_end) {
+    bool test = false;
+    ivec2 c;
+    ivec4 box;
+    float te, ne, be;
+    for (; it < budget && t < g_t_end; ++it) {
+      // Level sizes by shift (GL's iterated floor(size / 2) is floor(size / 2^level),
+      // at least 1), not textureSize(): llvmpipe was seen to return a stale
+      // size for a level that changed inside this loop. The loop has no
+      // `continue` for the same reason.
+      ivec2 size = max(ivec2(1), ivec2(u_size) >> level);
+      c = cell_at(level, t, size);
+      box = cell_bounds(level, c, size);
+      te = ray_exit(box);
+      if (!(te > t)) te = uintBitsToFloat(floatBitsToUint(t) + 1u);  // always move on (t >= 0)
+      ne = ray_num(te);
+      be = ray_b(te);
+      vec2 cell = texelFetch(u_pyramid, c, level).xy;
+      precise float lt = cell.x * bt;
+      precise float le = cell.x * be;
+      precise float ht = cell.y * bt;
+      precise float he = cell.y * be;
+      bool overlap = (nt >= lt || ne >= le) && (nt <= ht || ne <= he);
+      if (overlap && level == 0) {
+        test = true;
+        break;
+      }
+      if (overlap) {
+        known |= 1u << uint(level);
+        --level;  // something in this cell may meet the ray: look closer
+      } else {
+        t = te;
+        nt = ne;
+        bt = be;
+        known &= ~left_levels(box, te);
+        if (level < top && ((known >> uint(level + 1)) & 1u) == 0u) ++level;  // empty so far: a bigger stride
+      }
+    }
+    if (!test) return vec4(0.0);
+    float th;
+    bool located;
+    vec3 n, p;
+    int outcome = texel_hit(c, t, te, th, located, n, p);
+    if (outcome == BLOCKED) {
+      if (u_blocked == 0) return vec4(0.0);
+      blocked = true;  // what hides the hit: its texel's centre (march_hiz.cpp)
+      hit_c = c;
+      break;
+    }
+    if (outcome == HIT) {
+      hit = true;
+      hit_c = c;
+      hit_t = th;
+      hit_located = located;
+      hit_n = n;
+      hit_p = p;
+      break;
+    }
+    t = te;
+    nt = ne;
+    bt = be;
+    known &= ~left_levels(box, te);
+    if (level < top && ((known >> uint(level + 1)) & 1u) == 0u) ++level;
+    ++it;
+  }
+  // Outside the loops for the same reason: the outline test's five fetches
+  // run once per pixel, not once per texel test of any lane.
+  if (blocked) {
+    vec2 o = (vec2(hit_c) + 0.5) / u_size;
+    return vec4(o, hit_visibility(o.x, o.y, true), 0.0);
+  }
+  if (!hit) return vec4(0.0);
+  precise float u = (g_f0.x + hit_t * g_d.x) / u_size.x;
+  precise float v = (g_f0.y + hit_t * g_d.y) / u_size.y;
+  if (!finite_f(u) || !finite_f(v)) return vec4(0.0);
+  bool certain = hit_located && !on_outline(hit_c, hit_p, hit_n);
+  float vis = hit_visibility(u, v, certain);
+  return vec4(u, v, vis, vis);
+}

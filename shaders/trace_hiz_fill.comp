@@ -1,0 +1,156 @@
+#version 430 core
+// The hiz march's reuse of rays (trace_hiz() and reuse_neighbours() in
+// native/src/cpu/march_hiz.cpp, same tests on the same values): after
+// trace_hiz.frag traced every other pixel of every other row into u_coarse,
+// an invocation per 2x2 quad of the frame. Its traced corner pixel is copied;
+// each other pixel takes what its traced neighbours agree on, and where they
+// do not, it is appended to the list of hiz_rays.glsl, which
+// trace_hiz_list.comp traces. A quad at a time, because its three other
+// pixels all look at the same four traced pixels (the quad's corner and the
+// three next quads' ones): each is read once, not by up to eight fragments,
+// and every lane runs the same kind of pixel, where a fragment pass runs all
+// three kinds in each SIMD block.
+#include "common.glsl"
+#include "trace_common.glsl"
+#include "hiz_rays.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+uniform sampler2D u_coarse;  // RGBA32F, (w + 1) / 2 x (h + 1) / 2: pixel (2x, 2y)'s result
+
+layout(rgba32f, binding = 0) uniform writeonly image2D u_out;
+
+// kReuseCos, kReuseDepth, kReusePixels in march_hiz.cpp.
+const float REUSE_COS = 0.98;
+const float REUSE_DEPTH = 0.02;
+const float REUSE_PIXELS = 3.0;
+
+// A traced pixel as its neighbours see it.
+struct Traced {
+  bool inside;      // in the frame
+  bool reflective;  // is_reflective(), or no specular given
+  vec4 p;           // position
+  vec3 n;           // normal
+  vec4 r;           // its result (u_coarse)
+};
+
+Traced traced(ivec2 q) {
+  Traced t;
+  t.inside = q.x < int(u_size.x) && q.y < int(u_size.y);
+  t.reflective = !u_has_specular || is_reflective(texelFetch(u_specular, q, 0));
+  t.p = texelFetch(u_position, q, 0);
+  t.n = texelFetch(u_normal, q, 0).xyz;
+  t.r = texelFetch(u_coarse, q >> 1, 0);
+  return t;
+}
+
+// The per-neighbour half of reuse_neighbours(): q lies on the pixel's smooth
+// surface (p, n, nn = |n|^2).
+bool on_surface(vec4 p, vec3 n, float nn, Traced q) {
+  if (!q.inside) return false;
+  if (!q.reflective) return false;
+  vec4 pq = q.p;
+  vec3 nq = q.n;
+  precise float dz = abs(pq.z - p.z);
+  precise float lim = REUSE_DEPTH * abs(p.z);
+  if (!texel_seen(pq) || !(dz <= lim)) return false;
+  precise float d = n.x * nq.x + n.y * nq.y + n.z * nq.z;
+  precise float qq = nq.x * nq.x + nq.y * nq.y + nq.z * nq.z;
+  precise float dd = d * d;
+  precise float need = REUSE_COS * REUSE_COS * nn * qq;
+  if (!(d > 0.0) || !(dd >= need)) return false;
+  return true;
+}
+
+// Two neighbours' hits within REUSE_PIXELS of each other.
+bool close_hits(vec4 ha, vec4 hb) {
+  precise float du = (ha.x - hb.x) * u_size.x;
+  precise float dv = (ha.y - hb.y) * u_size.y;
+  precise float dist2 = du * du + dv * dv;
+  return dist2 <= REUSE_PIXELS * REUSE_PIXELS;
+}
+
+// reuse_neighbours() for the pixel at c, its k = 2 or 4 traced neighbours
+// q0..q3 (q2, q3 unused when k = 2), written out without arrays: a SIMD
+// compiler such as llvmpipe's keeps a loop-indexed local array in memory,
+// one gather per lane and access, which cost this pass most of its time.
+bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k, out vec4 o) {
+  o = vec4(0.0);
+  vec4 p = texelFetch(u_position, c, 0);
+  vec3 n = texelFetch(u_normal, c, 0).xyz;
+  // Only where the pixel's own ray exists (read_origin() would take it).
+  if (!texel_seen(p) || !finite_v3(p.xyz) || !finite_v3(n)) return false;
+  precise float nn = n.x * n.x + n.y * n.y + n.z * n.z;
+  if (!on_surface(p, n, nn, q0) || !on_surface(p, n, nn, q1)) return false;
+  if (k == 4 && (!on_surface(p, n, nn, q2) || !on_surface(p, n, nn, q3))) return false;
+  int hits = (q0.r.z > 0.0 ? 1 : 0) + (q1.r.z > 0.0 ? 1 : 0);
+  if (k == 4) hits += (q2.r.z > 0.0 ? 1 : 0) + (q3.r.z > 0.0 ? 1 : 0);
+  if (hits == 0) return true;
+  if (hits < k) return false;
+  if (!close_hits(q0.r, q1.r)) return false;
+  if (k == 4 && (!close_hits(q0.r, q2.r) || !close_hits(q0.r, q3.r) || !close_hits(q1.r, q2.r) ||
+                 !close_hits(q1.r, q3.r) || !close_hits(q2.r, q3.r)))
+    return false;
+  // The sums in the CPU's order, from 0.
+  precise float su = 0.0;
+  precise float sv = 0.0;
+  su += q0.r.x;
+  sv += q0.r.y;
+  su += q1.r.x;
+  sv += q1.r.y;
+  float vis = min(min(1.0, q0.r.z), q1.r.z);
+  float found = min(min(1.0, q0.r.w), q1.r.w);  // 0 where an occluder stands in
+  if (k == 4) {
+    su += q2.r.x;
+    sv += q2.r.y;
+    su += q3.r.x;
+    sv += q3.r.y;
+    vis = min(min(vis, q2.r.z), q3.r.z);
+    found = min(min(found, q2.r.w), q3.r.w);
+  }
+  precise float inv_k = 1.0 / float(k);
+  precise float ou = su * inv_k;
+  precise float ov = sv * inv_k;
+  o = vec4(ou, ov, vis, found);
+  return true;
+}
+
+// Pixel c of the quad: its result written, or c listed (true).
+bool settle(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k) {
+  vec4 o = vec4(0.0);
+  // Not reflective: the trace writes 0 there, as here.
+  if (u_has_specular && !is_reflective(texelFetch(u_specular, c, 0))) {
+    imageStore(u_out, c, o);
+    return false;
+  }
+  if (reuse_neighbours(c, q0, q1, q2, q3, k, o)) {
+    imageStore(u_out, c, o);
+    return false;
+  }
+  return true;
+}
+
+void main() {
+  ivec2 a = ivec2(gl_GlobalInvocationID.xy) * 2;  // the quad's traced pixel
+  ivec2 size = ivec2(u_size);
+  if (a.x >= size.x || a.y >= size.y) return;
+  Traced ta = traced(a);
+  imageStore(u_out, a, ta.r);
+  bool right = a.x + 1 < size.x, up = a.y + 1 < size.y;
+  // The traced pixels right of, above and diagonal to the quad; outside the
+  // frame they are read but never used (reuse_neighbours() stops at them).
+  Traced tb = traced(a + ivec2(2, 0));
+  Traced tc = traced(a + ivec2(0, 2));
+  Traced td = traced(a + ivec2(2, 2));
+  // Between two traced pixels of its row, between two of its column, at the
+  // centre of four.
+  bool row = right && settle(a + ivec2(1, 0), ta, tb, ta, tb, 2);
+  bool column = up && settle(a + ivec2(0, 1), ta, tc, ta, tc, 2);
+  bool centre = right && up && settle(a + ivec2(1, 1), ta, tb, tc, td, 4);
+  uint n = uint(row) + uint(column) + uint(centre);
+  if (n == 0u) return;
+  uint i = atomicAdd(count, n);
+  if (row) pixel[i++] = uint(a.x + 1) | uint(a.y) << 16;
+  if (column) pixel[i++] = uint(a.x) | uint(a.y + 1) << 16;
+  if (centre) pixel[i] = uint(a.x + 1) | uint(a.y + 1) << 16;
+}
