@@ -76,20 +76,21 @@ void GlState::raster_targets(RasterTargets& t, int colors, int w, int h, const c
   t.h = h;
 }
 
-void GlState::buffer_data(int index, GLenum target, size_t bytes, const void* data, const char* what) {
-  if (!buffers_[index]) gl_.GenBuffers(1, &buffers_[index]);
-  gl_.BindBuffer(target, buffers_[index]);
+void GlState::buffer_data(GLuint& buffer, GLenum target, size_t bytes, const void* data, const char* what,
+                          GLenum usage) {
+  if (!buffer) gl_.GenBuffers(1, &buffer);
+  gl_.BindBuffer(target, buffer);
   while (gl_.GetError() != GL_NO_ERROR) {
   }
   // Never a zero-sized store (some drivers reject binding one): tiny data is
   // padded in a copy, since GL reads the whole size from `data`.
   unsigned char padded[16] = {};
   if (bytes < sizeof padded) {
-    if (bytes) std::memcpy(padded, data, bytes);
+    if (bytes && data) std::memcpy(padded, data, bytes);
     data = padded;
     bytes = sizeof padded;
   }
-  gl_.BufferData(target, static_cast<GLsizeiptr>(bytes), data, GL_STREAM_DRAW);
+  gl_.BufferData(target, static_cast<GLsizeiptr>(bytes), data, usage);
   const GLenum err = gl_.GetError();
   if (err == GL_OUT_OF_MEMORY)
     throw Error("glint GL: out of memory: the " + std::string(what) + " buffer needs " + mib(double(bytes)) +
@@ -178,14 +179,14 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   bool map_used = false;
   for (const Material& m : in.materials) map_used = map_used || m.normal_map >= 0;
   any_map = any_map && map_used;
-  buffer_data(0, GL_ARRAY_BUFFER, positions->size() * sizeof(float), positions->data(), "positions");
-  buffer_data(1, GL_ARRAY_BUFFER, normals->size() * sizeof(float), normals->data(), "normals");
+  buffer_data(buffers_[0], GL_ARRAY_BUFFER, positions->size() * sizeof(float), positions->data(), "positions");
+  buffer_data(buffers_[1], GL_ARRAY_BUFFER, normals->size() * sizeof(float), normals->data(), "normals");
   if (any_map) {
-    buffer_data(2, GL_ARRAY_BUFFER, mesh.uvs.size() * sizeof(float), mesh.uvs.data(), "uvs");
-    buffer_data(3, GL_ARRAY_BUFFER, mesh.tangents.size() * sizeof(float), mesh.tangents.data(),
+    buffer_data(buffers_[2], GL_ARRAY_BUFFER, mesh.uvs.size() * sizeof(float), mesh.uvs.data(), "uvs");
+    buffer_data(buffers_[3], GL_ARRAY_BUFFER, mesh.tangents.size() * sizeof(float), mesh.tangents.data(),
                 "tangents");
   }
-  buffer_data(4, GL_SHADER_STORAGE_BUFFER, mesh.material.size() * sizeof(int32_t), mesh.material.data(),
+  buffer_data(buffers_[4], GL_SHADER_STORAGE_BUFFER, mesh.material.size() * sizeof(int32_t), mesh.material.data(),
               "material index");
   // Per material: specular rgb and the specular buffer's alpha.
   std::vector<float> table(in.materials.size() * 4);
@@ -196,7 +197,7 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
     table[4 * k + 2] = m.specular[2];
     table[4 * k + 3] = shininess_to_alpha(m.shininess);
   }
-  buffer_data(5, GL_SHADER_STORAGE_BUFFER, table.size() * sizeof(float), table.data(), "material");
+  buffer_data(buffers_[5], GL_SHADER_STORAGE_BUFFER, table.size() * sizeof(float), table.data(), "material");
 
   if (!raster_vao_) gl_.GenVertexArrays(1, &raster_vao_);
   gl_.BindVertexArray(raster_vao_);

@@ -123,17 +123,10 @@ class GlState {
 
   [[noreturn]] void out_of_memory(int w, int h, const char* pass, int textures);
 
-  // `t` as a w x h texture of `internal` (`format` the matching pixel
-  // format, `name` for errors: "RGBA32F"), allocated if its size changed.
+  // A w x h RGBA32F texture in `slot`, allocated if its size changed.
   // Allocation errors are checked in every build: running out of memory is
   // an expected outcome for large frames, not a bug.
-  Texture& sized(Texture& t, int w, int h, GLenum internal, GLenum format, const char* name, const char* pass,
-                 int textures);
-
-  // A w x h RGBA32F texture in `slot` (sized()).
-  Texture& target(Slot slot, int w, int h, const char* pass, int textures) {
-    return sized(textures_[slot], w, h, GL_RGBA32F, GL_RGBA, "RGBA32F", pass, textures);
-  }
+  Texture& target(Slot slot, int w, int h, const char* pass, int textures);
 
   Texture& upload(Slot slot, const Image& img, const char* pass, int textures);
 
@@ -180,7 +173,10 @@ class GlState {
   // it in errors ("the G-buffer"), `pass` is the stage for out-of-memory ones.
   void raster_targets(RasterTargets& t, int colors, int w, int h, const char* what, const char* pass);
   Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
-  void buffer_data(int index, GLenum target, size_t bytes, const void* data, const char* what);
+  // `bytes` of `data` (or uninitialised, for nullptr) into `buffer`, generated
+  // on first use and bound to `target`; GL_OUT_OF_MEMORY is an Error naming `what`.
+  void buffer_data(GLuint& buffer, GLenum target, size_t bytes, const void* data, const char* what,
+                   GLenum usage = GL_STREAM_DRAW);
 
   EglContext ctx_;
   const Api& gl_;

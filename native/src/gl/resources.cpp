@@ -125,8 +125,8 @@ void GlState::out_of_memory(int w, int h, const char* pass, int textures) {
               info().renderer + "). Use a smaller image or backend=\"cpu\".");
 }
 
-GlState::Texture& GlState::sized(Texture& t, int w, int h, GLenum internal, GLenum format, const char* name,
-                                  const char* pass, int textures) {
+GlState::Texture& GlState::target(Slot slot, int w, int h, const char* pass, int textures) {
+  Texture& t = textures_[slot];
   if (t.id && t.w == w && t.h == h) return t;
   release(t);
   check_size(w, h, pass, textures);
@@ -136,13 +136,13 @@ GlState::Texture& GlState::sized(Texture& t, int w, int h, GLenum internal, GLen
   scratch_unit();
   gl_.BindTexture(GL_TEXTURE_2D, t.id);
   gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-  gl_.TexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, GL_FLOAT, nullptr);
+  gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
   const GLenum err = gl_.GetError();
   if (err != GL_NO_ERROR) {
     release(t);
     if (err == GL_OUT_OF_MEMORY) out_of_memory(w, h, pass, textures);
-    throw Error(std::string("glint GL: allocating a ") + size_text(w, h) + " " + name + " texture for " + pass +
-                " failed: " + gl_error_name(err));
+    throw Error(std::string("glint GL: allocating a ") + size_text(w, h) + " RGBA32F texture for " +
+                pass + " failed: " + gl_error_name(err));
   }
   t.w = w;
   t.h = h;
@@ -198,22 +198,12 @@ GLuint GlState::hiz_ray_list(int w, int h) {
                 info().renderer + ": its list of rays needs " + mib(double(bytes)) +
                 " MiB, GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " + mib(double(limit)) +
                 " MiB. Use resolution above 0.5 or backend=\"cpu\" for this size.");
-  if (!hiz_rays_) gl_.GenBuffers(1, &hiz_rays_);
-  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, hiz_rays_);
   if (bytes > hiz_rays_bytes_) {
-    while (gl_.GetError() != GL_NO_ERROR) {
-    }
-    gl_.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(bytes), nullptr, GL_DYNAMIC_COPY);
-    const GLenum err = gl_.GetError();
-    if (err != GL_NO_ERROR) {
-      hiz_rays_bytes_ = 0;
-      if (err == GL_OUT_OF_MEMORY)
-        throw Error("glint GL: out of memory: the hiz march's list of rays for " + size_text(w, h) +
-                    " needs " + mib(double(bytes)) + " MiB (GL_OUT_OF_MEMORY on " + info().renderer + ")");
-      throw Error(std::string("glint GL: allocating the hiz march's list of rays failed: ") +
-                  gl_error_name(err));
-    }
+    hiz_rays_bytes_ = 0;  // until the larger store exists
+    buffer_data(hiz_rays_, GL_SHADER_STORAGE_BUFFER, bytes, nullptr, "hiz march's list of rays", GL_DYNAMIC_COPY);
     hiz_rays_bytes_ = bytes;
+  } else {
+    gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, hiz_rays_);
   }
   // groups_x, groups_y, groups_z, count (hiz_rays.glsl).
   const GLuint header[4] = {0, 1, 1, 0};
