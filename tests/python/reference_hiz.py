@@ -223,26 +223,23 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                         outcome, th = _texel(pos, planes, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
                                              plane_row, plane_depth, texel_thickness, depth)
                         if outcome == "blocked":
-                            if blocked == "occluder":
-                                result = (i, j), None
+                            if blocked == "occluder":  # the texel's centre, no confidence
+                                result = (i + 0.5) / w, (j + 0.5) / h, None
                             break
                         if outcome in ("hit", "hit on plane"):
+                            q = f0 + th * d
                             certain = outcome == "hit on plane" and not on_outline(i, j)
-                            result = th, certain
+                            result = q[0] / w, q[1] / h, certain
                             break
                 t = te
             if result is not None:
-                if result[1] is None:
-                    u, v = (result[0][0] + 0.5) / w, (result[0][1] + 0.5) / h
-                else:
-                    q = f0 + result[0] * d
-                    u, v = q[0] / w, q[1] / h
+                u, v, certain = result
                 fade = min(max(min(u, 1.0 - u, v, 1.0 - v) / EDGE_FADE, 0.0), 1.0)
-                if result[1] is None:  # the occluder: shown, but no hit found
+                if certain is None:  # the occluder: shown, but no hit found
                     out[y, x] = (u, v, fade, 0.0)
-                    continue
-                vis = (1.0 if result[1] else UNCERTAIN) * fade
-                out[y, x] = (u, v, vis, vis)
+                else:
+                    vis = (1.0 if certain else UNCERTAIN) * fade
+                    out[y, x] = (u, v, vis, vis)
     return out
 
 
