@@ -10,7 +10,7 @@ Switching Glint off puts those links back and removes what Glint added.
 from __future__ import annotations
 
 import hashlib
-from typing import Dict, Optional
+from typing import Dict, Optional, Tuple
 
 import bpy
 import numpy as np
@@ -188,34 +188,53 @@ def build_group():
     return group
 
 
-def update_group(glint, rough: bool = True) -> None:
-    """Push the values the group reads: the debug switches, and whether the
-    blur levels run (``rough``: some reflective material of the scene is rough)."""
+def update_group(glint, rough: bool = True, reflective_objects: int = 0) -> None:
+    """Push the values the group reads: the debug switches, whether the blur
+    levels run (``rough``: some reflective material of the scene is rough) and
+    whether the second bounce does (glint.second_bounce, ``reflective_objects``)."""
     group = find_group()
     if group is None:
         return
-    for name, check in cg.switch_states(glint.debug_view, rough).items():
+    bounce = cg.use_second_bounce(glint.second_bounce, reflective_objects)
+    for name, check in cg.switch_states(glint.debug_view, rough, bounce).items():
         node = group.nodes.get(name)
         if node is not None and node.check != check:
             node.check = check
 
 
-def scene_has_rough_reflector(scene) -> bool:
-    """Whether a material of the scene's objects reflects and is rough enough for
-    the blur (its shininess below a mirror's): the blur levels run only then.
-    Read from the materials, not the frame, because the render takes the node
-    tree's values before the frame is exported (module docstring of handlers)."""
-    seen = set()
+def second_bounce_on() -> Optional[bool]:
+    """Whether the group runs the second bounce (None without the group): the
+    value ``update_group`` set at render_init, which the render's copy of the
+    node tree holds."""
+    group = find_group()
+    node = group.nodes.get("use_bounce") if group is not None else None
+    return None if node is None else bool(node.check)
+
+
+def scene_reflectors(scene) -> Tuple[int, bool]:
+    """How many of the scene's objects have a reflective material, and whether
+    one of those materials is rough enough for the blur (its shininess below a
+    mirror's). Read from the materials, not the frame, because the render takes
+    the node tree's values before the frame is exported (module docstring of
+    handlers); objects hidden from the render are not counted."""
+    reflective_of = {}  # material name -> (reflective, rough)
+    count, rough = 0, False
     for ob in scene.objects:
+        if ob.hide_render:
+            continue
+        reflects = False
         for slot in getattr(ob, "material_slots", ()):
             mat = slot.material
-            if mat is None or mat.name in seen:
+            if mat is None:
                 continue
-            seen.add(mat.name)
-            spec, _ = gather.material_info(mat)
-            if spec.amount > 0 and spec.alpha < 1.0:
-                return True
-    return False
+            if mat.name not in reflective_of:
+                spec, _ = gather.material_info(mat)
+                reflective_of[mat.name] = (spec.amount > 0, spec.amount > 0 and spec.alpha < 1.0)
+            r, g = reflective_of[mat.name]
+            reflects = reflects or r
+            rough = rough or g
+        count += reflects
+    return count, rough
 
 
 # ----------------------------------------------------------------------------
@@ -290,7 +309,8 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     if not _group_is_current(group):
         change("Glint's node group is missing or out of date")
         group = build_group()
-    update_group(glint, scene_has_rough_reflector(scene))  # values only, written when they differ
+    reflective_objects, rough = scene_reflectors(scene)
+    update_group(glint, rough, reflective_objects)  # values only, written when they differ
     view_layer = target_view_layer(scene)
     rl = _render_layers_node(tree, scene, view_layer)
     if rl is None:

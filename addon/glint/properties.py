@@ -141,6 +141,10 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
         description="Where a reflected ray passes behind an object, so that what it reflects is hidden "
                     "from the camera, show the object in front (as Eevee's SSR does) instead of the "
                     "world. Hi-Z march only")
+    second_bounce: EnumProperty(
+        name="Second Bounce", items=cg.SECOND_BOUNCE, default="AUTO", update=_on_compositor_setting,
+        description="Mirrors that reflect mirrors show those mirrors' reflections too (one more "
+                    "bounce, one more Map UV in the compositor)")
     backend: EnumProperty(name="Backend", items=sl.BACKENDS, default="AUTO",
                           description="Where the G-buffer and the trace run")
     debug_view: EnumProperty(name="Debug View", items=cg.DEBUG_VIEWS, default="NONE",

@@ -86,6 +86,7 @@ class GLINT_PT_parameters(_GlintSubPanel, bpy.types.Panel):
         col.prop(glint, "steps")
         layout.prop(glint, "march")
         layout.prop(glint, "fill_hidden")
+        layout.prop(glint, "second_bounce")
 
 
 class GLINT_PT_backend(_GlintSubPanel, bpy.types.Panel):

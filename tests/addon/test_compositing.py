@@ -74,12 +74,18 @@ def gauss_clamp(img, sigma):
     return out.astype(np.float32)
 
 
-def reference_composite(base, uv, weight, lod, light, colour):
+def reference_composite(base, uv, weight, lod, light, colour, bounce=False):
     """out = base + R, R = D at the pixel's lod between Gaussian levels of D,
-    D = C W - vis S: written from the formula, not from the node list."""
+    D = C W - vis S: written from the formula, not from the node list. With
+    ``bounce``, C is sampled from the frame with its first bounce, base + D."""
     vis = uv[..., 2:3]
     C = np.where(vis > 0, bilinear_clamp(base, uv[..., 0], uv[..., 1]) * vis, 0.0)
     D = C[..., :3] * weight[..., :3] - vis * (light[..., :3] * colour[..., :3])
+    if bounce:
+        first = base.copy()
+        first[..., :3] += D
+        C = np.where(vis > 0, bilinear_clamp(first, uv[..., 0], uv[..., 1]) * vis, 0.0)
+        D = C[..., :3] * weight[..., :3] - vis * (light[..., :3] * colour[..., :3])
     levels = [(0.0, D)] + [(lod_j, gauss_clamp(D, sigma)) for lod_j, sigma in cg.BLUR_LEVELS]
     R = np.array(D)
     for (l0, b0), (l1, b1) in zip(levels, levels[1:]):
@@ -155,6 +161,37 @@ def test_group_computes_the_composite(engine_passes):
     assert np.allclose(out["Engine Specular"][..., :3], light[..., :3] * colour[..., :3], atol=1e-6)
 
 
+@pytest.mark.parametrize("engine_passes", [True, False])
+def test_second_bounce_samples_the_frame_with_its_first(engine_passes):
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(seed=11)
+    kw = dict(specular_light=light, specular_color=colour) if engine_passes else {}
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+                            use_bounce=True, **kw)
+    if not engine_passes:
+        light = colour = np.zeros_like(base)
+    want, R = reference_composite(base, uv, weight, lod, light, colour, bounce=True)
+    one, _ = reference_composite(base, uv, weight, lod, light, colour)
+    assert np.abs(want - one).max() > 0.05  # the second bounce is there to be found
+    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.allclose(out["Reflection"][..., :3], R, atol=1e-5)
+    assert np.array_equal(out["Image"][..., 3], base[..., 3])
+
+
+def test_second_bounce_runs_where_reflectors_can_meet():
+    assert not cg.use_second_bounce("AUTO", 0)
+    assert not cg.use_second_bounce("AUTO", 1)
+    assert cg.use_second_bounce("AUTO", 2)
+    assert cg.use_second_bounce("ON", 1)
+    assert not cg.use_second_bounce("OFF", 5)
+    with pytest.raises(ValueError, match="second bounce"):
+        cg.use_second_bounce("TWICE", 2)
+    calls = []
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    images = images_of(base, position, spec, uv, weight, lod)
+    cg.evaluate_group(base, images, lambda i, u: calls.append(1) or np_map_uv(i, u), gauss_clamp)
+    assert len(calls) == 1  # switched off, the second Map UV does not run
+
+
 def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
     """vis 1, lod 0: the pixel's engine specular S leaves, the reflection C W comes in."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
@@ -213,7 +250,8 @@ def test_debug_switches():
     for view in cg.GBUFFER_DEBUG_VIEWS:
         assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, gauss_clamp,
                                                 debug_view=view)["Image"], dbg)
-    assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False}
+    assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
+                                               "use_bounce": False}
 
 
 def test_group_matches_glint_core_for_a_mirror(core):

@@ -119,6 +119,23 @@ s.glint.debug_view = 'REFLECTION'
 g = bpy.data.node_groups[cg.GROUP_NAME]
 res['passes'] = [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]
 res['switch'] = [g.nodes['show_reflection'].check, g.nodes['show_debug'].check]
+# The second bounce: Auto runs it from two reflective objects on (the factory cube is one)
+from glint import compositor as glint_compositor
+bounce = [g.nodes['use_bounce'].check]
+plane = bpy.data.objects.new('Second Reflector', bpy.data.meshes.new('Second Reflector'))
+plane.data.materials.append(s.objects['Cube'].material_slots[0].material)
+s.collection.objects.link(plane)
+glint_compositor.ensure(s)
+bounce.append(g.nodes['use_bounce'].check)
+s.glint.second_bounce = 'OFF'
+bounce.append(g.nodes['use_bounce'].check)
+plane.hide_render = True
+s.glint.second_bounce = 'ON'
+bounce.append(g.nodes['use_bounce'].check)
+s.glint.second_bounce = 'AUTO'
+bounce.append(g.nodes['use_bounce'].check)
+bpy.data.objects.remove(plane)
+res['bounce'] = bounce
 s.glint.preset = 'HIGH'
 res['preset'] = [s.glint.march, s.glint.resolution, s.glint.steps]
 from glint import native as glint_native
@@ -169,6 +186,8 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     assert res["textured_on"]["nodes"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer",
                                                   "Glint", "Glint EXR"])
     assert res["switch"] == [True, False]
+    # Auto with one reflector, Auto with two, Off, On with the second hidden, Auto so
+    assert res["bounce"] == [False, True, False, True, False]
     high = res["core_high"]  # the add-on's presets are the core's
     assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"]]
     assert res["preset_after_edit"] == "CUSTOM"

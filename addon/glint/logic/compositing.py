@@ -22,7 +22,8 @@ and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
     D   = C * W - vis * S                               what changes: the engine's
                                                         specular out where a hit
                                                         replaces it, the reflection in
-    R   = D blurred at the pixel's lod                  (rough surfaces only)
+    D2  = D + W * vis * D(u, v)                         the second bounce (below)
+    R   = D2 blurred at the pixel's lod                 (rough surfaces only)
     out = frame + R
 
 Replace, not add: where the trace found the reflection (vis 1) the engine's
@@ -43,6 +44,14 @@ diameter 2^lod_j holding half its energy (the cone's definition, see
 weights each neighbour by its own W and S, which vary slowly over a rough
 surface. A frame with no rough reflective surface switches the levels off
 (``use_blur``): the compositor then does not run them at all.
+
+The second bounce: a mirror that reflects another mirror shows that mirror as
+the engine rendered it, without its reflection. Sampling the frame *with* the
+first bounce at (u, v) adds it: frame + D at the hit, so C' = C + vis D(u, v)
+and the pixel's change gains W * vis * D(u, v) (one more Map UV, of D). It
+reflects D unblurred, and the hit's own hit is not followed further. It costs
+what the first Map UV costs (the group's largest node), so it runs only where
+reflectors can see each other (``use_bounce``, see :func:`use_second_bounce`).
 
 :func:`evaluate_group` runs the same description on numpy arrays, so tests
 check the wiring against the formula without Blender.
@@ -164,6 +173,10 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "finite_b": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
     "finite_specular": ("CompositorNodeCombineColor", {"mode": "RGB"}, {3: 1.0}),
     "delta": _mix("SUBTRACT"),                      # C * W - vis * S
+    "bounce_map_uv": ("CompositorNodeMapUV", {"alpha": 0}, {}),  # vis * D(u, v)
+    "bounce_weighted": _mix("MULTIPLY", {0: 1.0}),  # W * vis * D(u, v)
+    "bounced": _mix("ADD", {0: 1.0}),               # D2 = D + W * vis * D(u, v)
+    "use_bounce": ("CompositorNodeSwitch", {"check": False}, {}),
     "use_blur": ("CompositorNodeSwitch", {"check": True}, {}),
     "combined": _mix("ADD", {0: 1.0}),              # frame + R
     "show_reflection": ("CompositorNodeSwitch", {"check": False}, {}),
@@ -200,19 +213,28 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("sep_uv", 2, "delta", 0),
     ("weighted", 0, "delta", 1),
     ("finite_specular", 0, "delta", 2),
+    ("delta", 0, "bounce_map_uv", 0),
+    ("uv_image", 0, "bounce_map_uv", 1),
+    ("bounce_map_uv", 0, "bounce_weighted", 1),
+    ("weight_image", 0, "bounce_weighted", 2),
+    ("delta", 0, "bounced", 1),
+    ("bounce_weighted", 0, "bounced", 2),
+    # input 0 when off: D alone, the second Map UV not run
+    ("delta", 0, "use_bounce", 0),
+    ("bounced", 0, "use_bounce", 1),
 ]
 for _j in range(1, len(BLUR_LEVELS) + 1):
-    _below = "delta" if _j == 1 else f"mix_{_j - 1}"
+    _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
     GROUP_LINKS += [
-        ("delta", 0, f"blur_{_j}", 0),
+        ("use_bounce", 0, f"blur_{_j}", 0),
         ("weight_image", 1, f"level_{_j}", 0),
         (f"level_{_j}", 0, f"mix_{_j}", 0),
         (_below, 0, f"mix_{_j}", 1),
         (f"blur_{_j}", 0, f"mix_{_j}", 2),
     ]
 GROUP_LINKS += [
-    # the Switch takes input 0 when off: the unblurred D, levels not run
-    ("delta", 0, "use_blur", 0),
+    # the Switch takes input 0 when off: the unblurred D2, levels not run
+    ("use_bounce", 0, "use_blur", 0),
     (f"mix_{len(BLUR_LEVELS)}", 0, "use_blur", 1),
     (GROUP_IN, 0, "combined", 1),
     ("use_blur", 0, "combined", 2),
@@ -246,11 +268,29 @@ EXR_LAYERS = (
 )
 
 
-def switch_states(debug_view: str, use_blur: bool = True) -> Dict[str, bool]:
-    """The Switch nodes' ``check`` for a debug view and whether any reflective
-    surface in the frame is rough."""
+def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False) -> Dict[str, bool]:
+    """The Switch nodes' ``check`` for a debug view, whether any reflective
+    surface in the frame is rough, and whether the second bounce runs."""
     return {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
-            "use_blur": bool(use_blur)}
+            "use_blur": bool(use_blur), "use_bounce": bool(use_bounce)}
+
+
+# The second bounce setting: enum value -> (label, description).
+SECOND_BOUNCE = (
+    ("AUTO", "Auto", "When the scene has two or more reflective objects, which can reflect each other "
+                     "(a single concave reflector, such as a room made as one mesh, needs On)"),
+    ("ON", "On", "Always: mirrors show the reflections in the mirrors they reflect; costs one more "
+                 "Map UV in the compositor"),
+    ("OFF", "Off", "Never: a reflected mirror shows as the engine rendered it"),
+)
+
+
+def use_second_bounce(mode: str, reflective_objects: int) -> bool:
+    """Whether the group runs the second bounce. One convex reflector cannot see
+    itself, so Auto waits for a second one."""
+    if mode not in {m for m, _, _ in SECOND_BOUNCE}:
+        raise ValueError(f"second bounce: expected one of {[m for m, _, _ in SECOND_BOUNCE]}, got {mode!r}")
+    return mode == "ON" or (mode == "AUTO" and reflective_objects >= 2)
 
 
 # ----------------------------------------------------------------------------
@@ -353,7 +393,8 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    map_uv: Callable[[np.ndarray, np.ndarray], np.ndarray],
                    blur: Callable[[np.ndarray, float], np.ndarray],
                    specular_light: Optional[np.ndarray] = None, specular_color: Optional[np.ndarray] = None,
-                   debug_view: str = "NONE", use_blur: bool = True) -> Dict[str, np.ndarray]:
+                   debug_view: str = "NONE", use_blur: bool = True,
+                   use_bounce: bool = False) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
 
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
@@ -371,7 +412,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     for src, so, dst, di in GROUP_LINKS:
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
-    switches = switch_states(debug_view, use_blur)
+    switches = switch_states(debug_view, use_blur, use_bounce)
 
     def inp(node, index):
         link = incoming.get((node, index))
