@@ -26,8 +26,9 @@ a checkout after building:
       [--cycles-cache DIR]
 
 --cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
-scene, size, samples, Blender and this script are the same: Cycles is most of a run's
-time and does not depend on Glint, so comparing Glint's changes needs it once.
+scene, size, samples, Blender and the code that makes the frames are the same: Cycles is
+most of a run's time and does not depend on Glint, so comparing Glint's changes needs it
+once.
 
 The add-on is registered from this checkout (or --addon); the core comes from
 GLINT_CORE_PATH (default: <checkout>/build/python).
@@ -35,6 +36,7 @@ GLINT_CORE_PATH (default: <checkout>/build/python).
 from __future__ import annotations
 
 import hashlib
+import inspect
 import math
 import os
 import statistics
@@ -148,20 +150,23 @@ def _floor_scene(roughness):
 
 
 def _metal_scene():
-    """A metal sphere on a matte floor in a room open towards the camera and the sky."""
-    _plane("Floor", 10.0, (0, 0, 0), (0, 0, 0), _diffuse("Floor", (0.5, 0.45, 0.4)))
-    _plane("Back Wall", 10.0, (0, 5, 2), (math.radians(90), 0, 0), _diffuse("Back", (0.1, 0.3, 0.7)),
-           scale=(1.0, 0.4, 1.0))
-    _plane("Left Wall", 10.0, (-5, 0, 2), (math.radians(90), 0, math.radians(90)),
-           _diffuse("Left", (0.7, 0.15, 0.1)), scale=(1.0, 0.4, 1.0))
-    _plane("Right Wall", 10.0, (5, 0, 2), (math.radians(90), 0, math.radians(90)),
-           _diffuse("Right", (0.15, 0.6, 0.15)), scale=(1.0, 0.4, 1.0))
+    """A metal sphere in a room seen from its open side, as a Cornell box is: the
+    camera stands outside, so the floor and the three walls the sphere reflects are
+    all in the frame. The room is open to the sky above and towards the camera."""
+    half, height = 3.0, 4.0
+    _plane("Floor", 2 * half, (0, 0, 0), (0, 0, 0), _diffuse("Floor", (0.5, 0.45, 0.4)))
+    _plane("Back Wall", 2 * half, (0, half, height / 2), (math.radians(90), 0, 0),
+           _diffuse("Back", (0.1, 0.3, 0.7)), scale=(1.0, height / (2 * half), 1.0))
+    _plane("Left Wall", 2 * half, (-half, 0, height / 2), (math.radians(90), 0, math.radians(90)),
+           _diffuse("Left", (0.7, 0.15, 0.1)), scale=(1.0, height / (2 * half), 1.0))
+    _plane("Right Wall", 2 * half, (half, 0, height / 2), (math.radians(90), 0, math.radians(90)),
+           _diffuse("Right", (0.15, 0.6, 0.15)), scale=(1.0, height / (2 * half), 1.0))
     _add("primitive_cube_add", _diffuse("Box", (0.9, 0.7, 0.05)), smooth=False,
-         size=1.0, location=(-1.8, 1.2, 0.5))
+         size=1.0, location=(-1.6, 1.2, 0.5))
     sphere = _add("primitive_uv_sphere_add", _material("Metal", (0.9, 0.9, 0.9), 0.1, metallic=1.0),
                   radius=1.0, location=(0.4, 0.0, 1.0), segments=64, ring_count=32)
     _sun((40, 0, 20))
-    _camera((0.0, -8.0, 2.6), (80, 0, 0))
+    _camera((0.0, -11.0, 2.2), (84, 0, 0), lens=35.0)
     return [sphere]
 
 
@@ -215,6 +220,11 @@ def build_scene(name, opts):
     scene.display_settings.display_device = "sRGB"
     scene.eevee.taa_render_samples = opts["eevee-samples"]
     scene.eevee.use_ssr_halfres = False
+    # Eevee lights with the world unoccluded unless its ambient occlusion is on: the
+    # corridor's walls then came out 30% brighter than Cycles' (docs/look.md), and every
+    # reflection of them with it. On, at the rooms' scale, for Eevee, SSR and Glint alike.
+    scene.eevee.use_gtao = True
+    scene.eevee.gtao_distance = 3.0
     c = scene.cycles
     c.device = "CPU"
     c.samples = max(1, opts["cycles-samples"] // 2)  # two seeds, averaged
@@ -369,11 +379,12 @@ def write_png(path, display):
 def cycles_frames(name, scene, meshes, opts, tmp):
     """The two seeds' (with, without) pairs, from --cycles-cache when it has them.
     The key holds everything the frames depend on: the scene, size and samples,
-    Blender's build, and this file (which builds the scenes and sets Cycles up)."""
+    Blender's build, and the source of the code that builds the scenes and sets
+    Cycles up (:data:`CYCLES_CODE`)."""
     path = None
     if opts["cycles-cache"]:
-        with open(__file__, "rb") as f:
-            script = hashlib.sha1(f.read()).hexdigest()[:12]
+        source = "".join(inspect.getsource(f) for f in CYCLES_CODE)
+        script = hashlib.sha1(source.encode()).hexdigest()[:12]
         w, h = opts["size"]
         key = f"{name}_{w}x{h}_{opts['cycles-samples']}_{bpy.app.version_string}_{bpy.app.build_hash.decode()}_{script}"
         path = os.path.join(opts["cycles-cache"], key.replace(" ", "-") + ".npz")
@@ -386,6 +397,11 @@ def cycles_frames(name, scene, meshes, opts, tmp):
         os.makedirs(opts["cycles-cache"], exist_ok=True)
         np.savez(path, with_a=with_a, without_a=without_a, with_b=with_b, without_b=without_b)
     return with_a, without_a, with_b, without_b
+
+
+# What the Cycles frames depend on besides the options: --cycles-cache keys on its source.
+CYCLES_CODE = (_material, _diffuse, _add, _plane, _sun, _camera, _floor_scene, _metal_scene, _corridor_scene,
+               build_scene, render, cycles_pair)
 
 
 def run_scene(name, opts, state, tmp):
