@@ -60,18 +60,6 @@ def resolve_backend(core, requested: str) -> str:
         return "cpu"
 
 
-def _with_backend(core, backend: str, requested: str, call):
-    """Run ``call(backend)``; when GL fails mid-way and the user asked for 'auto',
-    run it again on the CPU."""
-    try:
-        return call(backend), backend
-    except core.BackendUnavailable as exc:
-        if requested != "auto" or backend == "cpu":
-            raise
-        log(f"OpenGL backend failed ({exc}); using the CPU backend")
-        return call("cpu"), "cpu"
-
-
 def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport:
     """Export, rasterize and trace the frame; fill the compositor's images."""
     glint = scene.glint
@@ -115,8 +103,8 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             layers as ``core.composite_layers`` returns them; None when no pixel reflects."""
             kw = dict(kwargs, **settings_logic.look_kwargs(values))
             with timings.measure("rasterize"):
-                gbuf, used = _with_backend(core, backend, requested,
-                                           lambda b: rasterize(core, exp, b, back_layer, size))
+                gbuf, used = settings_logic.with_cpu_fallback(
+                    lambda b: rasterize(core, exp, b, back_layer, size), backend, requested, log)
             progress.check()
             position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
             report.backend = used
@@ -132,9 +120,9 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
                 # the G-buffer crosses into the core once. Pixels that do not
                 # reflect are not traced; the normals of what they show stay, for
                 # the rays that hit them.
-                layers, used = _with_backend(core, used, requested,
-                                             lambda b: core.composite_layers(position, normal, specular, proj32,
-                                                                             backend=b, **kw))
+                layers, used = settings_logic.with_cpu_fallback(
+                    lambda b: core.composite_layers(position, normal, specular, proj32, backend=b, **kw),
+                    used, requested, log)
             report.backend = used
             report.reflective_pixels = int(layers["reflective_pixels"])
             if report.reflective_pixels == 0:

@@ -142,3 +142,46 @@ def test_gpu_device_lookup(tmp_path):
     assert s.has_gpu_device((str(tmp_path / "renderD*"),), platform="linux") is True
     assert s.has_gpu_device((str(tmp_path / "card*"),), platform="linux") is False
     assert s.has_gpu_device((), platform="darwin") is True
+
+
+class _GlFailure(RuntimeError):
+    pass
+
+
+def _calls(fail_on):
+    seen = []
+
+    def call(backend):
+        seen.append(backend)
+        if backend in fail_on:
+            raise fail_on[backend]
+        return f"done on {backend}"
+    return call, seen
+
+
+def test_auto_falls_back_to_the_cpu_when_gl_fails_mid_frame():
+    call, seen = _calls({"gl": _GlFailure("glint GL: GL_CONTEXT_LOST in trace")})
+    lines = []
+    assert s.with_cpu_fallback(call, "gl", "auto", lines.append) == ("done on cpu", "cpu")
+    assert seen == ["gl", "cpu"]
+    assert len(lines) == 1 and "GL_CONTEXT_LOST" in lines[0] and "CPU" in lines[0]
+
+
+@pytest.mark.parametrize("backend, requested, error", [
+    ("gl", "gl", _GlFailure("lost")),        # pinned to GL: the user asked for it
+    ("cpu", "auto", _GlFailure("core bug")),  # the CPU itself failed: nothing to fall back to
+    ("gl", "auto", ValueError("position: bad shape")),  # bad input is bad on every backend
+    ("gl", "auto", MemoryError("over the limit")),      # a refusal for memory has its own retry
+])
+def test_no_fallback_where_the_cpu_would_not_help(backend, requested, error):
+    call, seen = _calls({backend: error})
+    lines = []
+    with pytest.raises(type(error)):
+        s.with_cpu_fallback(call, backend, requested, lines.append)
+    assert seen == [backend] and lines == []
+
+
+def test_no_fallback_when_gl_works():
+    call, seen = _calls({})
+    assert s.with_cpu_fallback(call, "gl", "auto", print) == ("done on gl", "gl")
+    assert seen == ["gl"]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import glob
 import sys
-from typing import Dict, List, Mapping, Tuple
+from typing import Callable, Dict, List, Mapping, Tuple, TypeVar
 
 # name: (default, min, max, soft_min, soft_max, description)
 PARAMETERS = {
@@ -157,3 +157,22 @@ def auto_backend(pixels: int, triangles: int, gpu: bool = None) -> str:
     if pixels <= AUTO_CPU_MAX_PIXELS and triangles <= AUTO_CPU_MAX_TRIANGLES:
         return "cpu"
     return "auto"
+
+
+T = TypeVar("T")
+
+
+def with_cpu_fallback(call: Callable[[str], T], backend: str, requested: str,
+                      log: Callable[[str], None]) -> Tuple[T, str]:
+    """``(call(backend), backend)``. When the user asked for Auto and OpenGL fails
+    (no context, a lost context, a GL error mid-frame: the core raises
+    RuntimeError or its subclass BackendUnavailable for those), run ``call`` again
+    on the CPU, with a line for the log. Bad input (ValueError), memory refusals
+    (MemoryError) and anything the user pinned to a backend are raised as they are."""
+    try:
+        return call(backend), backend
+    except RuntimeError as exc:
+        if requested != "auto" or backend != "gl":
+            raise
+        log(f"OpenGL backend failed ({type(exc).__name__}: {exc}); using the CPU backend")
+        return call("cpu"), "cpu"
