@@ -9,12 +9,15 @@
 // pixels all look at the same four traced pixels (the quad's corner and the
 // three next quads' ones): each is read once, not by up to eight fragments,
 // and every lane runs the same kind of pixel, where a fragment pass runs all
-// three kinds in each SIMD block.
+// three kinds in each SIMD block. A group is a row of quads: on llvmpipe,
+// which runs a group's lanes 8 at a time along x, 64x1 groups made this pass
+// 25-30% faster than 8x8 ones (and the list they append, in row order, a
+// little faster to walk), with the same result.
 #include "common.glsl"
 #include "trace_common.glsl"
 #include "hiz_rays.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 64) in;
 
 uniform sampler2D u_coarse;  // RGBA32F, (w + 1) / 2 x (h + 1) / 2: pixel (2x, 2y)'s result
 

@@ -147,6 +147,10 @@ class GlState {
 
   void draw(int w, int h);
 
+  // Enough groups of the compute program `prog` to run w x h invocations, at
+  // the work group size its shader declares (asked of GL: the shader alone says it).
+  void dispatch(GLuint prog, int w, int h);
+
   // Reads the colour attachment `attachment` of the bound framebuffer.
   Image read(int w, int h, GLenum attachment, const char* pass);
 

@@ -91,7 +91,7 @@ Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const
   gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
   gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
   bind(fill, "u_coarse", 7, quarter, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  gl_.DispatchCompute(static_cast<GLuint>((cw + 7) / 8), static_cast<GLuint>((ch + 7) / 8), 1);
+  dispatch(fill, cw, ch);
   // 3. The dispatch's size from the list's length, on the GPU: no read-back.
   gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   gl_.UseProgram(program("hiz_rays_args.comp"));
