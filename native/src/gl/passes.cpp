@@ -115,8 +115,8 @@ void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, cons
   // The base level and the plane normals (which the walk reads) in one pass.
   const GLuint base = program("hiz_base.frag");
   gl_.UseProgram(base);
-  bind(base, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(base, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.BindImageTexture(0, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(1, nrm.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   bind_hiz_inputs(base, in, pos, back);
   gl_.Uniform2f(loc(base, "u_size"), static_cast<float>(w), static_cast<float>(h));
   gl_.Uniform1f(loc(base, "u_thickness"), opt.thickness);
