@@ -122,31 +122,22 @@ void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, cons
   gl_.Uniform1f(loc(base, "u_thickness"), opt.thickness);
   attach_level(pyramid_.id, 0, &planes);
   draw(w, h);
-  reduce_levels(pyramid_.id, pyramid_.levels, program("hiz_reduce.frag"), w, h);
+  reduce_levels(pyramid_.id, pyramid_.levels, GL_RG32F, program("hiz_reduce.frag"), w, h);
   debug_check("hiz pyramid");
 }
 
-void GlState::reduce_levels(GLuint tex, int levels, GLuint reduce, int w, int h) {
+void GlState::reduce_levels(GLuint tex, int levels, GLenum format, GLuint reduce, int w, int h) {
   gl_.UseProgram(reduce);
-  gl_.Uniform1i(loc(reduce, "u_src"), 5);
   int sw = w, sh = h;
   for (int level = 1; level < levels; ++level) {
     const int dw = std::max(1, sw / 2), dh = std::max(1, sh / 2);
-    gl_.ActiveTexture(GL_TEXTURE0 + 5);
-    gl_.BindTexture(GL_TEXTURE_2D, tex);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, level - 1);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, level - 1);
+    gl_.BindImageTexture(0, tex, level - 1, GL_FALSE, 0, GL_READ_ONLY, format);
     gl_.Uniform4i(loc(reduce, "u_sizes"), sw, sh, dw, dh);
     attach_level(tex, level);
     draw(dw, dh);
     sw = dw;
     sh = dh;
   }
-  gl_.ActiveTexture(GL_TEXTURE0 + 5);
-  gl_.BindTexture(GL_TEXTURE_2D, tex);
-  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
-  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, levels - 1);
-  gl_.BindTexture(GL_TEXTURE_2D, 0);
 }
 
 void GlState::bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back) {
