@@ -85,12 +85,13 @@ Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const
   gl_.BindImageTexture(0, out.id, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   const GLuint fill = program("trace_hiz_fill.comp");
   gl_.UseProgram(fill);
-  bind(fill, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(fill, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(fill, "u_specular", 2, spec ? *spec : nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.BindImageTexture(1, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(2, nrm.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  // An unused image unit still needs an image bound: the normals stand in.
+  gl_.BindImageTexture(3, (spec ? *spec : nrm).id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(4, quarter.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
   gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
-  bind(fill, "u_coarse", 7, quarter, GL_NEAREST, GL_CLAMP_TO_EDGE);
   dispatch(fill, cw, ch);
   // 3. The dispatch's size from the list's length, on the GPU: no read-back.
   gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
