@@ -64,6 +64,8 @@ void GlState::trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOpti
   gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
   gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
   gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
+  gl_.BindImageTexture(5, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(6, textures_[kPlanes].id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   gl_.Uniform1i(loc(prog, "u_pass"), 0);
   gl_.Uniform1i(loc(prog, "u_blocked"), opt.blocked == Blocked::Occluder ? 1 : 0);
 }
@@ -149,7 +151,6 @@ void GlState::bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture&
   // An unused sampler still needs a complete texture: the position stands in.
   bind(prog, "u_back", 3, back ? *back : pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
   gl_.Uniform1i(loc(prog, "u_has_back"), back ? 1 : 0);
-  bind(prog, "u_planes", 6, textures_[kPlanes], GL_NEAREST, GL_CLAMP_TO_EDGE);
 }
 
 Image GlState::reflection_color(const Image& uv, const Image& color) {
