@@ -18,7 +18,7 @@ void main() {
   ivec2 px = pixel_coord();
   vec3 plane = plane_normal(px);
   out_normal = vec4(plane, 0.0);
-  vec4 p = texelFetch(u_position, px, 0);
+  vec4 p = imageLoad(u_position_img, px);
   if (!texel_seen(p)) {
     out_range = vec2(uintBitsToFloat(0x7f800000u), uintBitsToFloat(0xff800000u));
     return;

@@ -6,7 +6,6 @@
 uniform float u_inv[16];          // inverse projection, row-major (cpu::HizCamera)
 uniform sampler2D u_back;         // RGBA32F back-face layer, read when u_has_back
 uniform bool u_has_back;
-uniform sampler2D u_planes;       // RGBA32F plane normals (hiz_planes.frag), xyz used
 
 const float FOOTPRINT_SPREAD = 0.5;
 const float PLANE_TOLERANCE = 1e-5;

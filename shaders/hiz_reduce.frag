@@ -1,11 +1,11 @@
 #version 430 core
-// One level of the Hi-Z pyramid from the level below it (bound as the only
-// level of u_src): min of the nearest, max of the farthest. The last texel
+// One level of the Hi-Z pyramid from the level below it (u_src, an image of
+// that level alone): min of the nearest, max of the farthest. The last texel
 // of a row or column also takes what an odd size leaves over, so that with
 // GL's floor(size / 2) levels no texel is lost.
 #include "fragment.glsl"
 
-uniform sampler2D u_src;
+layout(rg32f, binding = 0) uniform readonly image2D u_src;
 uniform ivec4 u_sizes;  // source level width, height; this level's width, height
 
 layout(location = 0) out vec2 out_range;
@@ -22,7 +22,7 @@ void main() {
   float hi = uintBitsToFloat(0xff800000u);
   for (int y = y0; y <= y1; ++y) {
     for (int x = x0; x <= x1; ++x) {
-      vec2 c = texelFetch(u_src, ivec2(x, y), 0).xy;
+      vec2 c = imageLoad(u_src, ivec2(x, y)).xy;
       lo = c.x < lo ? c.x : lo;
       hi = hi < c.y ? c.y : hi;
     }

@@ -10,6 +10,11 @@
 
 uniform sampler2D u_pyramid;  // RG32F, full mip chain: (nearest, farthest + thickness)
 uniform int u_levels;
+// A texel test's reads, as images: on llvmpipe an imageLoad costs much less
+// than a texelFetch of the same texture (the pyramid cannot be read so: each
+// lane reads its own level, and an image is one level).
+layout(rgba32f, binding = 5) uniform readonly image2D u_position_img;  // the G-buffer's positions
+layout(rgba32f, binding = 6) uniform readonly image2D u_planes;  // the plane normals (hiz_base.frag), xyz used
 // TraceOptions::blocked: 1 (occluder) reports a blocked ray at the texel that
 // blocks it as (u, v, edge fade, 0); 0 (miss) reports nothing.
 uniform int u_blocked;
@@ -130,8 +135,8 @@ const int BLOCKED = 2;
 
 // n, p: the texel's plane normal (u_planes) and position, for the outline test after a hit.
 int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, out vec3 n, out vec3 p) {
-  n = texelFetch(u_planes, c, 0).xyz;
-  p = texelFetch(u_position, c, 0).xyz;
+  n = imageLoad(u_planes, c).xyz;
+  p = imageLoad(u_position_img, c).xyz;
   t_hit = ta;
   located = false;
   if (!normal_usable(n)) return HIT;
@@ -187,7 +192,7 @@ bool on_outline(ivec2 c, vec3 p, vec3 n) {
   for (int k = 0; k < 4; ++k) {
     ivec2 q = nb[k];
     if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) continue;
-    vec4 o = texelFetch(u_position, q, 0);
+    vec4 o = imageLoad(u_position_img, q);
     precise float g = n.x * (o.x - p.x) + n.y * (o.y - p.y) + n.z * (o.z - p.z);
     if (!texel_seen(o) || g < lim) outline = true;
   }

@@ -61,7 +61,7 @@ Image GlState::cone_blur(const Image& color, const Image& uv, const Image& specu
   gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, color.data.data());
 
   // Each level from the one below (reduce_levels: no pass samples what it writes).
-  reduce_levels(chain, cone_chain_.levels, program("cone_reduce.frag"), w, h);
+  reduce_levels(chain, cone_chain_.levels, GL_RGBA32F, program("cone_reduce.frag"), w, h);
   debug_check("cone_blur chain");
 
   const Texture& t_uv = upload(kIn0, uv, "cone_blur", 5);

@@ -64,6 +64,8 @@ void GlState::trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOpti
   gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
   gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
   gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
+  gl_.BindImageTexture(5, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(6, textures_[kPlanes].id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   gl_.Uniform1i(loc(prog, "u_pass"), 0);
   gl_.Uniform1i(loc(prog, "u_blocked"), opt.blocked == Blocked::Occluder ? 1 : 0);
 }
@@ -85,13 +87,14 @@ Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const
   gl_.BindImageTexture(0, out.id, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   const GLuint fill = program("trace_hiz_fill.comp");
   gl_.UseProgram(fill);
-  bind(fill, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(fill, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(fill, "u_specular", 2, spec ? *spec : nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.BindImageTexture(1, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(2, nrm.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  // An unused image unit still needs an image bound: the normals stand in.
+  gl_.BindImageTexture(3, (spec ? *spec : nrm).id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(4, quarter.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
   gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
-  bind(fill, "u_coarse", 7, quarter, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  gl_.DispatchCompute(static_cast<GLuint>((cw + 7) / 8), static_cast<GLuint>((ch + 7) / 8), 1);
+  dispatch(fill, cw, ch);
   // 3. The dispatch's size from the list's length, on the GPU: no read-back.
   gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   gl_.UseProgram(program("hiz_rays_args.comp"));
@@ -115,38 +118,29 @@ void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, cons
   // The base level and the plane normals (which the walk reads) in one pass.
   const GLuint base = program("hiz_base.frag");
   gl_.UseProgram(base);
-  bind(base, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(base, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.BindImageTexture(0, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  gl_.BindImageTexture(1, nrm.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   bind_hiz_inputs(base, in, pos, back);
   gl_.Uniform2f(loc(base, "u_size"), static_cast<float>(w), static_cast<float>(h));
   gl_.Uniform1f(loc(base, "u_thickness"), opt.thickness);
   attach_level(pyramid_.id, 0, &planes);
   draw(w, h);
-  reduce_levels(pyramid_.id, pyramid_.levels, program("hiz_reduce.frag"), w, h);
+  reduce_levels(pyramid_.id, pyramid_.levels, GL_RG32F, program("hiz_reduce.frag"), w, h);
   debug_check("hiz pyramid");
 }
 
-void GlState::reduce_levels(GLuint tex, int levels, GLuint reduce, int w, int h) {
+void GlState::reduce_levels(GLuint tex, int levels, GLenum format, GLuint reduce, int w, int h) {
   gl_.UseProgram(reduce);
-  gl_.Uniform1i(loc(reduce, "u_src"), 5);
   int sw = w, sh = h;
   for (int level = 1; level < levels; ++level) {
     const int dw = std::max(1, sw / 2), dh = std::max(1, sh / 2);
-    gl_.ActiveTexture(GL_TEXTURE0 + 5);
-    gl_.BindTexture(GL_TEXTURE_2D, tex);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, level - 1);
-    gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, level - 1);
+    gl_.BindImageTexture(0, tex, level - 1, GL_FALSE, 0, GL_READ_ONLY, format);
     gl_.Uniform4i(loc(reduce, "u_sizes"), sw, sh, dw, dh);
     attach_level(tex, level);
     draw(dw, dh);
     sw = dw;
     sh = dh;
   }
-  gl_.ActiveTexture(GL_TEXTURE0 + 5);
-  gl_.BindTexture(GL_TEXTURE_2D, tex);
-  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
-  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, levels - 1);
-  gl_.BindTexture(GL_TEXTURE_2D, 0);
 }
 
 void GlState::bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back) {
@@ -157,7 +151,6 @@ void GlState::bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture&
   // An unused sampler still needs a complete texture: the position stands in.
   bind(prog, "u_back", 3, back ? *back : pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
   gl_.Uniform1i(loc(prog, "u_has_back"), back ? 1 : 0);
-  bind(prog, "u_planes", 6, textures_[kPlanes], GL_NEAREST, GL_CLAMP_TO_EDGE);
 }
 
 Image GlState::reflection_color(const Image& uv, const Image& color) {

@@ -233,6 +233,13 @@ void GlState::draw(int w, int h) {
   gl_.DrawArrays(GL_TRIANGLES, 0, 3);
 }
 
+void GlState::dispatch(GLuint prog, int w, int h) {
+  GLint size[3] = {1, 1, 1};
+  gl_.GetProgramiv(prog, GL_COMPUTE_WORK_GROUP_SIZE, size);
+  gl_.DispatchCompute(static_cast<GLuint>((w + size[0] - 1) / size[0]),
+                      static_cast<GLuint>((h + size[1] - 1) / size[1]), 1);
+}
+
 Image GlState::read(int w, int h, GLenum attachment, const char* pass) {
   Image out;
   try {
