@@ -188,15 +188,16 @@ def build_group():
     return group
 
 
-def update_group(glint, rough: bool = True, reflective_objects: int = 0) -> None:
+def update_group(glint, rough: bool = True, reflective_objects: int = 0, world_specular: bool = False) -> None:
     """Push the values the group reads: the debug switches, whether the blur
-    levels run (``rough``: some reflective material of the scene is rough) and
-    whether the second bounce does (glint.second_bounce, ``reflective_objects``)."""
+    levels run (``rough``: some reflective material of the scene is rough),
+    whether the second bounce does (glint.second_bounce, ``reflective_objects``)
+    and whether S is the world colour x W (``world_specular``)."""
     group = find_group()
     if group is None:
         return
     bounce = cg.use_second_bounce(glint.second_bounce, reflective_objects)
-    for name, check in cg.switch_states(glint.debug_view, rough, bounce).items():
+    for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular).items():
         node = group.nodes.get(name)
         if node is not None and node.check != check:
             node.check = check
@@ -309,8 +310,6 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     if not _group_is_current(group):
         change("Glint's node group is missing or out of date")
         group = build_group()
-    reflective_objects, rough = scene_reflectors(scene)
-    update_group(glint, rough, reflective_objects)  # values only, written when they differ
     view_layer = target_view_layer(scene)
     rl = _render_layers_node(tree, scene, view_layer)
     if rl is None:
@@ -351,6 +350,9 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         change("the Glint node is not fed by the Render Layers node")
         tree.links.new(rl.outputs["Image"], gnode.inputs["Image"])
     _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
+    reflective_objects, rough = scene_reflectors(scene)
+    update_group(glint, rough, reflective_objects,  # values only, written when they differ
+                 STATE.specular_source == world_logic.SOURCE_WORLD)
     # A Composite node that receives nothing writes a black frame: feed it
     # Glint's image (a group rebuilt by an older Glint could leave it so).
     for comp in (n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"):

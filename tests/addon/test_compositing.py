@@ -192,6 +192,23 @@ def test_second_bounce_runs_where_reflectors_can_meet():
     assert len(calls) == 1  # switched off, the second Map UV does not run
 
 
+@pytest.mark.parametrize("bounce", [False, True])
+def test_the_world_path_is_the_passes_path_with_s_the_world_colour_times_w(bounce):
+    """Under a uniform world the group's inputs are the world colour and W: its
+    short path must give what the passes' path gives for those inputs."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(seed=5)
+    world = np.broadcast_to(np.array((0.3, 0.35, 0.45, 1.0), np.float32), base.shape)
+    w_image = images_of(base, position, spec, uv, weight, lod)[cg.IMAGE_WEIGHT]
+    kw = dict(specular_light=world, specular_color=w_image, use_bounce=bounce)
+    short = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv,
+                              gauss_clamp, world_specular=True, **kw)
+    full = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
+    want, _ = reference_composite(base, uv, weight, lod, world, w_image, bounce=bounce)
+    assert np.allclose(short["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.allclose(full["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.abs(short["Image"] - base).max() > 0.05
+
+
 def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
     """vis 1, lod 0: the pixel's engine specular S leaves, the reflection C W comes in."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
@@ -251,7 +268,7 @@ def test_debug_switches():
         assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, gauss_clamp,
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
-                                               "use_bounce": False}
+                                               "use_bounce": False, "use_passes": True}
 
 
 def test_group_matches_glint_core_for_a_mirror(core):

@@ -30,7 +30,9 @@ Replace, not add: where the trace found the reflection (vis 1) the engine's
 specular of the world is taken out and the reflection put in; where it found
 nothing (vis 0), D = 0 and the pixel is exactly the engine's. Under Eevee and
 a uniform world the group's two inputs are the world's colour and the weight
-image instead of the passes (S = colour x W, logic/world.py). Engines without
+image instead of the passes (S = colour x W, logic/world.py), and the group
+takes D = W (C - vis colour) there (``use_passes`` off): the same D in two
+nodes instead of eight, each of which the compositor runs on every pixel. Engines without
 those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
 
@@ -173,6 +175,11 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "finite_b": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
     "finite_specular": ("CompositorNodeCombineColor", {"mode": "RGB"}, {3: 1.0}),
     "delta": _mix("SUBTRACT"),                      # C * W - vis * S
+    # Under a uniform world S = colour x W: D = W (C - vis colour), two nodes
+    # where the passes' path takes eight (the compositor runs each on every pixel).
+    "world_replaced": _mix("SUBTRACT"),             # C - vis * colour
+    "world_delta": _mix("MULTIPLY", {0: 1.0}),      # W (C - vis * colour)
+    "use_passes": ("CompositorNodeSwitch", {"check": True}, {}),
     "bounce_map_uv": ("CompositorNodeMapUV", {"alpha": 0}, {}),  # vis * D(u, v)
     "bounce_weighted": _mix("MULTIPLY", {0: 1.0}),  # W * vis * D(u, v)
     "bounced": _mix("ADD", {0: 1.0}),               # D2 = D + W * vis * D(u, v)
@@ -213,14 +220,22 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("sep_uv", 2, "delta", 0),
     ("weighted", 0, "delta", 1),
     ("finite_specular", 0, "delta", 2),
-    ("delta", 0, "bounce_map_uv", 0),
+    ("sep_uv", 2, "world_replaced", 0),
+    ("map_uv", 0, "world_replaced", 1),
+    (GROUP_IN, 1, "world_replaced", 2),
+    ("world_replaced", 0, "world_delta", 1),
+    ("weight_image", 0, "world_delta", 2),
+    # input 0 when off: the world's path, the passes' nodes not run
+    ("world_delta", 0, "use_passes", 0),
+    ("delta", 0, "use_passes", 1),
+    ("use_passes", 0, "bounce_map_uv", 0),
     ("uv_image", 0, "bounce_map_uv", 1),
     ("bounce_map_uv", 0, "bounce_weighted", 1),
     ("weight_image", 0, "bounce_weighted", 2),
-    ("delta", 0, "bounced", 1),
+    ("use_passes", 0, "bounced", 1),
     ("bounce_weighted", 0, "bounced", 2),
     # input 0 when off: D alone, the second Map UV not run
-    ("delta", 0, "use_bounce", 0),
+    ("use_passes", 0, "use_bounce", 0),
     ("bounced", 0, "use_bounce", 1),
 ]
 for _j in range(1, len(BLUR_LEVELS) + 1):
@@ -268,11 +283,14 @@ EXR_LAYERS = (
 )
 
 
-def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False) -> Dict[str, bool]:
+def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False,
+                  world_specular: bool = False) -> Dict[str, bool]:
     """The Switch nodes' ``check`` for a debug view, whether any reflective
-    surface in the frame is rough, and whether the second bounce runs."""
+    surface in the frame is rough, whether the second bounce runs, and whether
+    S is the world colour (Specular Light) times W (``world_specular``: the
+    group's Specular Color input is then not read)."""
     return {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
-            "use_blur": bool(use_blur), "use_bounce": bool(use_bounce)}
+            "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular}
 
 
 # The second bounce setting: enum value -> (label, description).
@@ -394,7 +412,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    blur: Callable[[np.ndarray, float], np.ndarray],
                    specular_light: Optional[np.ndarray] = None, specular_color: Optional[np.ndarray] = None,
                    debug_view: str = "NONE", use_blur: bool = True,
-                   use_bounce: bool = False) -> Dict[str, np.ndarray]:
+                   use_bounce: bool = False, world_specular: bool = False) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
 
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
@@ -412,7 +430,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     for src, so, dst, di in GROUP_LINKS:
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
-    switches = switch_states(debug_view, use_blur, use_bounce)
+    switches = switch_states(debug_view, use_blur, use_bounce, world_specular)
 
     def inp(node, index):
         link = incoming.get((node, index))
