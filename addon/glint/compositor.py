@@ -188,28 +188,18 @@ def build_group():
     return group
 
 
-def update_group(glint, rough: bool = True, reflective_objects: int = 0, world_specular: bool = False) -> None:
+def update_group(glint, rough: bool = True, bounce: bool = False, world_specular: bool = False) -> None:
     """Push the values the group reads: the debug switches, whether the blur
     levels run (``rough``: some reflective material of the scene is rough),
-    whether the second bounce does (glint.second_bounce, ``reflective_objects``)
-    and whether S is the world colour x W (``world_specular``)."""
+    whether the second bounce does and whether S is the world colour x W
+    (``world_specular``)."""
     group = find_group()
     if group is None:
         return
-    bounce = cg.use_second_bounce(glint.second_bounce, reflective_objects)
     for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular).items():
         node = group.nodes.get(name)
         if node is not None and node.check != check:
             node.check = check
-
-
-def second_bounce_on() -> Optional[bool]:
-    """Whether the group runs the second bounce (None without the group): the
-    value ``update_group`` set at render_init, which the render's copy of the
-    node tree holds."""
-    group = find_group()
-    node = group.nodes.get("use_bounce") if group is not None else None
-    return None if node is None else bool(node.check)
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:
@@ -351,7 +341,8 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         tree.links.new(rl.outputs["Image"], gnode.inputs["Image"])
     _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
     reflective_objects, rough = scene_reflectors(scene)
-    update_group(glint, rough, reflective_objects,  # values only, written when they differ
+    STATE.second_bounce = cg.use_second_bounce(glint.second_bounce, reflective_objects)
+    update_group(glint, rough, STATE.second_bounce,  # values only, written when they differ
                  STATE.specular_source == world_logic.SOURCE_WORLD)
     # A Composite node that receives nothing writes a black frame: feed it
     # Glint's image (a group rebuilt by an older Glint could leave it so).

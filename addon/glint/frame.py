@@ -153,7 +153,7 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         uv, weight = layers["uv"], layers["weight"]
         if not layers["any_rough"]:
             report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
-        if compositor.second_bounce_on() is False:
+        if STATE.second_bounce is False:
             report.message = "; ".join(filter(None, [report.message, "second bounce not run"]))
         if factor > 1:
             with timings.measure("upsample"):

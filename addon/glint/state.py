@@ -52,6 +52,10 @@ class _State:
         # Where the last render's engine specular S came from (logic/world.py:
         # "world colour" or "Eevee passes"), None for other engines.
         self.specular_source: Optional[str] = None
+        # Whether the group runs the second bounce, as compositor.ensure set it
+        # (None before it ran): the frame's log line reads it here, not from the
+        # node tree, which the render thread had better not walk.
+        self.second_bounce: Optional[bool] = None
 
     def log(self, message: str) -> str:
         line = f"{PREFIX} {message}"

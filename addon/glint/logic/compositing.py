@@ -32,7 +32,8 @@ nothing (vis 0), D = 0 and the pixel is exactly the engine's. Under Eevee and
 a uniform world the group's two inputs are the world's colour and the weight
 image instead of the passes (S = colour x W, logic/world.py), and the group
 takes D = W (C - vis colour) there (``use_passes`` off): the same D in two
-nodes instead of eight, each of which the compositor runs on every pixel. Engines without
+nodes instead of eight, each of which the compositor runs on every pixel.
+Engines without
 those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
 
