@@ -177,8 +177,15 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
             log(f"frame {report.frame}: {note}")
         progress.check()
         with timings.measure("images"):
-            images = {compositing.IMAGE_UV: uv, compositing.IMAGE_WEIGHT: weight}
             view = values["debug_view"]
+            # The group composites only the region that can change; a debug
+            # view or the layers EXR shows the uv and vis of the whole frame.
+            if view != "NONE" or values["write_layers_exr"]:
+                region = (0, 0, cam.width, cam.height)
+            else:
+                region = compositing.image_region(uv[..., 2], weight[..., 3])
+            images = compositing.region_images(uv, weight, region)
+            report.region = region
             if view in compositing.GBUFFER_DEBUG_VIEWS:
                 images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
             if values["write_layers_exr"]:

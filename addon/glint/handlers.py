@@ -99,6 +99,12 @@ def on_render_init(scene, *args):
         log(f"the specular a reflection replaces comes from the {STATE.specular_source}")
 
 
+def _region_text(report) -> str:
+    x0, y0, x1, y1 = report.region
+    share = (x1 - x0) * (y1 - y0) / max(1, report.width * report.height)
+    return f"{x1 - x0}x{y1 - y0} ({share:.0%} of the frame)"
+
+
 def _skip(scene, reason: str) -> None:
     """This render gets no reflections, for ``reason``: say so everywhere."""
     _job["skip"] = reason
@@ -149,7 +155,8 @@ def on_frame_change_post(scene, depsgraph=None, *args):
     if report.status == "ok":
         log(f"frame {report.frame}: reflections composited ({report.width}x{report.height}, "
             f"{report.triangles} triangles from {report.objects} objects, {report.culled} culled, "
-            f"{report.reflective_pixels} reflective pixels, backend {report.backend}; {t}; "
+            f"{report.reflective_pixels} reflective pixels, composited {_region_text(report)}, "
+            f"backend {report.backend}; {t}; "
             f"{report.message})")
     elif report.status == "skipped":
         log(f"frame {report.frame}: nothing to reflect: {report.message} ({t or 'no work'})")

@@ -12,7 +12,7 @@ from __future__ import annotations
 import queue
 import threading
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
 PREFIX = "Glint:"
 
@@ -29,6 +29,9 @@ class FrameReport:
     objects: int = 0
     culled: int = 0
     reflective_pixels: int = 0
+    # (x0, y0, x1, y1): the pixels the compositor's group works on, the rest of
+    # the frame passes through (logic/compositing.image_region)
+    region: Tuple[int, int, int, int] = (0, 0, 0, 0)
     timings_ms: Dict[str, float] = field(default_factory=dict)
 
 

@@ -12,7 +12,7 @@ cg = load_logic("compositing")
 
 INPUTS = {"CompositorNodeMath": 3, "CompositorNodeMixRGB": 3, "CompositorNodeSeparateColor": 1,
           "CompositorNodeCombineColor": 4, "CompositorNodeMapUV": 2, "CompositorNodeBlur": 2,
-          "CompositorNodeSwitch": 2, "CompositorNodeImage": 0}
+          "CompositorNodeSwitch": 2, "CompositorNodeImage": 0, "CompositorNodeTranslate": 3}
 OUTPUTS = {"CompositorNodeSeparateColor": 4, "CompositorNodeImage": 2}
 
 
@@ -314,3 +314,78 @@ def test_debug_images():
     assert np.array_equal(cg.debug_image("VISIBILITY", position, normal, spec, uv)[0, 0], (0.5, 0.5, 0.5, 1))
     with pytest.raises(ValueError):
         cg.debug_image("REFLECTION", position, normal, spec, uv)
+
+
+# -- the region: only the part of the frame that can change is composited ------
+
+def test_image_region_is_the_box_of_hits_and_blurred_pixels_grown_by_the_pad():
+    vis = np.zeros((20, 30), np.float32)
+    lod = np.zeros((20, 30), np.float32)
+    assert cg.image_region(vis, lod) == (0, 0, 1, 1)  # nothing to do: one pixel, vis 0
+    vis[5, 7] = 0.5
+    vis[9, 12] = 1.0
+    p = cg.REGION_PAD
+    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 13 + p, 10 + p)
+    lod[15, 20] = 0.25  # a rough pixel takes blurred D from hits around it
+    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 21 + p, 16 + p)
+    vis[0, 0] = lod[19, 29] = 1.0  # the pad stops at the frame
+    assert cg.image_region(vis, lod) == (0, 0, 30, 20)
+
+
+@pytest.mark.parametrize("region,size", [((3, 2, 23, 12), (64, 36)), ((40, 20, 61, 31), (64, 36)),
+                                         ((0, 0, 64, 7), (64, 36)), ((63, 35, 64, 36), (64, 36)),
+                                         ((0, 0, 64, 36), (64, 36)), ((5, 4, 10, 9), (11, 9))])
+def test_the_offset_puts_the_region_back_where_it_was_cut(region, size):
+    """The placements measured in Blender 3.4 (both execution models): a bw x bh
+    image translated by (x0 + bw/2 - W/2, y0 + bh/2 - H/2) covers exactly
+    columns x0..x0+bw-1 and rows y0..y0+bh-1."""
+    w, h = size
+    rng = np.random.default_rng(1)
+    frame = rng.uniform(size=(h, w, 4)).astype(np.float32)
+    imgs = cg.region_images(frame, frame, region)
+    x0, y0, x1, y1 = region
+    dx, dy = imgs[cg.IMAGE_OFFSET][0, 0, :2]
+    placed = cg._translated(imgs[cg.IMAGE_UV], float(dx), float(dy), (h, w))
+    want = np.zeros_like(frame)
+    want[y0:y1, x0:x1] = frame[y0:y1, x0:x1]
+    assert np.array_equal(placed, want)
+
+
+def confined_scene(seed):
+    """scene() with every hit and every rough pixel inside rows 6..14, columns 9..22
+    of a 24 x 32 frame: the region is a third of it."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(h=24, w=32, seed=seed)
+    inside = np.zeros(base.shape[:2], bool)
+    inside[6:15, 9:23] = True
+    uv[~inside] = 0
+    lod[~inside] = 0
+    return base, position, spec, uv, seen, weight, lod, light, colour
+
+
+@pytest.mark.parametrize("world,bounce,blur", [(True, False, False), (True, True, True), (False, False, True),
+                                               (False, True, False)])
+def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur):
+    """Cut to the region and placed back by the offset, the images give the frame
+    the group gives from frame-sized ones, bit for bit; a frame-sized input that
+    met the region untranslated would raise."""
+    base, position, spec, uv, seen, weight, lod, light, colour = confined_scene(seed=7)
+    full = images_of(base, position, spec, uv, weight, lod)
+    region = cg.image_region(uv[..., 2], lod)
+    assert region == (9 - cg.REGION_PAD, 6 - cg.REGION_PAD, 23 + cg.REGION_PAD, 15 + cg.REGION_PAD)
+    cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region))
+    if world:  # the world path's inputs: a colour (an RGB node, no size) and the weight image
+        kw = dict(specular_light=np.array((0.3, 0.35, 0.45, 1.0), np.float32), world_specular=True)
+    else:
+        kw = dict(specular_light=light, specular_color=colour)
+    kw.update(use_bounce=bounce, use_blur=blur)
+    want = cg.evaluate_group(base, full, np_map_uv, gauss_clamp, **kw)
+    got = cg.evaluate_group(base, cut, np_map_uv, gauss_clamp, **kw)
+    assert np.abs(want["Image"] - base).max() > 0.05
+    assert np.array_equal(got["Image"], want["Image"])
+
+
+def test_region_meeting_the_frame_untranslated_is_caught():
+    with pytest.raises(ValueError, match="different sizes"):
+        cg._canvas([np.zeros((4, 5, 4)), np.zeros((6, 5))], (6, 5))
+    with pytest.raises(ValueError, match="does not land"):
+        cg._translated(np.zeros((3, 3, 4)), 0.25, 0.0, (8, 8))

@@ -73,7 +73,10 @@ IMAGE_DEBUG = "Glint Debug"
 IMAGE_POSITION = "Glint Position"
 IMAGE_NORMAL = "Glint Normal"
 IMAGE_SPECULAR = "Glint Specular"
-ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR)
+IMAGE_OFFSET = "Glint Offset"  # 1x1: where the region's images go in the frame (:func:`region_offset`)
+ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR, IMAGE_OFFSET)
+# The images cut to the frame's region (the others stay frame-sized).
+REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT)
 # The one image whose zeros make the group pass the frame through (vis = 0:
 # C = 0 and D = 0): what a frame Glint does not handle clears.
 PASS_THROUGH_IMAGE = IMAGE_UV
@@ -152,6 +155,10 @@ def _mix(blend_type: str, defaults=None):
             defaults or {})
 
 
+def _translate():
+    return ("CompositorNodeTranslate", {"use_relative": False, "wrap_axis": "NONE"}, {})
+
+
 # Node description: name -> (bl_idname, properties, {input index: default value}).
 # Inputs are addressed by index: Math nodes have several inputs named "Value".
 GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
@@ -164,6 +171,21 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     # alpha = 0: no fading by uv derivatives, so Map UV only premultiplies by vis.
     "map_uv": ("CompositorNodeMapUV", {"alpha": 0}, {}),
     "sep_uv": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    "offset_image": ("CompositorNodeImage", {"image": IMAGE_OFFSET}, {}),
+    "sep_offset": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    # The region's results into the frame (see "The region" above). Whatever
+    # meets a frame-sized input goes through one of these first.
+    "world_to_frame": _translate(),
+    "weighted_to_frame": _translate(),
+    "uv_to_frame": _translate(),
+    "bounce_to_frame": _translate(),
+    "weight_to_frame": _translate(),
+    "sep_uv_frame": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    "sep_weight_frame": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    # D on a frame-sized canvas, 0 x frame + 1 x D: what the second Map UV
+    # samples (it scales uv by its image's size) and what the blur spreads.
+    "bounce_source": _mix("MIX", {0: 1.0}),
+    "blur_source": _mix("MIX", {0: 1.0}),
     "weighted": _mix("MULTIPLY", {0: 1.0}),        # C * W
     "engine_specular": _mix("MULTIPLY", {0: 1.0}),  # S = light * colour
     # Eevee writes its light passes divided by their colour: where the colour is
@@ -207,6 +229,7 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     (GROUP_IN, 0, "map_uv", 0),
     ("uv_image", 0, "map_uv", 1),
     ("uv_image", 0, "sep_uv", 0),
+    ("offset_image", 0, "sep_offset", 0),
     ("map_uv", 0, "weighted", 1),
     ("weight_image", 0, "weighted", 2),
     (GROUP_IN, 1, "engine_specular", 1),
@@ -218,32 +241,47 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("finite_r", 0, "finite_specular", 0),
     ("finite_g", 0, "finite_specular", 1),
     ("finite_b", 0, "finite_specular", 2),
-    ("sep_uv", 2, "delta", 0),
-    ("weighted", 0, "delta", 1),
+    # the passes' path meets the frame-sized S: C * W and vis go to the frame first
+    ("weighted", 0, "weighted_to_frame", 0),
+    ("uv_image", 0, "uv_to_frame", 0),
+    ("uv_to_frame", 0, "sep_uv_frame", 0),
+    ("sep_uv_frame", 2, "delta", 0),
+    ("weighted_to_frame", 0, "delta", 1),
     ("finite_specular", 0, "delta", 2),
+    # the world's path stays on the region up to D
     ("sep_uv", 2, "world_replaced", 0),
     ("map_uv", 0, "world_replaced", 1),
     (GROUP_IN, 1, "world_replaced", 2),
     ("world_replaced", 0, "world_delta", 1),
     ("weight_image", 0, "world_delta", 2),
+    ("world_delta", 0, "world_to_frame", 0),
     # input 0 when off: the world's path, the passes' nodes not run
-    ("world_delta", 0, "use_passes", 0),
+    ("world_to_frame", 0, "use_passes", 0),
     ("delta", 0, "use_passes", 1),
-    ("use_passes", 0, "bounce_map_uv", 0),
+    (GROUP_IN, 0, "bounce_source", 1),
+    ("use_passes", 0, "bounce_source", 2),
+    ("bounce_source", 0, "bounce_map_uv", 0),
     ("uv_image", 0, "bounce_map_uv", 1),
     ("bounce_map_uv", 0, "bounce_weighted", 1),
     ("weight_image", 0, "bounce_weighted", 2),
-    ("use_passes", 0, "bounced", 1),
-    ("bounce_weighted", 0, "bounced", 2),
+    ("bounce_weighted", 0, "bounce_to_frame", 0),
+    ("bounce_source", 0, "bounced", 1),
+    ("bounce_to_frame", 0, "bounced", 2),
     # input 0 when off: D alone, the second Map UV not run
     ("use_passes", 0, "use_bounce", 0),
     ("bounced", 0, "use_bounce", 1),
+    (GROUP_IN, 0, "blur_source", 1),
+    ("use_bounce", 0, "blur_source", 2),
+    ("weight_image", 0, "weight_to_frame", 0),
+    ("weight_to_frame", 0, "sep_weight_frame", 0),
 ]
+for _t in ("world_to_frame", "weighted_to_frame", "uv_to_frame", "bounce_to_frame", "weight_to_frame"):
+    GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
 for _j in range(1, len(BLUR_LEVELS) + 1):
-    _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
+    _below = "blur_source" if _j == 1 else f"mix_{_j - 1}"
     GROUP_LINKS += [
-        ("use_bounce", 0, f"blur_{_j}", 0),
-        ("weight_image", 1, f"level_{_j}", 0),
+        ("blur_source", 0, f"blur_{_j}", 0),
+        ("sep_weight_frame", 3, f"level_{_j}", 0),
         (f"level_{_j}", 0, f"mix_{_j}", 0),
         (_below, 0, f"mix_{_j}", 1),
         (f"blur_{_j}", 0, f"mix_{_j}", 2),
@@ -345,6 +383,47 @@ def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
     return seen
 
 
+# Pixels kept around the region's hits: Map UV estimates each pixel's uv
+# derivatives from its neighbours' uv (bilinear reads one pixel away), and a hit
+# at the region's edge must see the same neighbours as in the whole frame.
+REGION_PAD = 2
+
+
+def image_region(vis: np.ndarray, lod: np.ndarray, pad: int = REGION_PAD) -> Tuple[int, int, int, int]:
+    """(x0, y0, x1, y1), the pixel rows and columns [y0, y1) x [x0, x1) outside
+    which the group leaves the frame as it is: the bounding box of the hits
+    (vis > 0; D = 0 elsewhere) and of the pixels that take a blurred D
+    (lod > 0), grown by ``pad`` and cut to the frame. No such pixel: one pixel,
+    whose vis 0 changes nothing."""
+    h, w = np.shape(vis)[:2]
+    touched = np.asarray(vis) > 0
+    touched |= np.asarray(lod) > 0
+    rows = np.flatnonzero(touched.any(axis=1))
+    if rows.size == 0:
+        return 0, 0, 1, 1
+    cols = np.flatnonzero(touched[rows[0]:rows[-1] + 1].any(axis=0))
+    return (max(0, int(cols[0]) - pad), max(0, int(rows[0]) - pad),
+            min(w, int(cols[-1]) + 1 + pad), min(h, int(rows[-1]) + 1 + pad))
+
+
+def region_offset(region: Tuple[int, int, int, int], width: int, height: int) -> Tuple[float, float]:
+    """The Translate that puts a region-sized canvas, which Blender centres on
+    the frame, at its place: (x0 + bw/2 - W/2, y0 + bh/2 - H/2) pixels, a
+    multiple of one half (checked with Blender 3.4, Tiled and Full Frame)."""
+    x0, y0, x1, y1 = region
+    return x0 + (x1 - x0) / 2.0 - width / 2.0, y0 + (y1 - y0) / 2.0 - height / 2.0
+
+
+def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int]) -> Dict[str, np.ndarray]:
+    """The uv and weight images cut to ``region`` (views, not copies) and the
+    1x1 offset image that places them (:data:`IMAGE_OFFSET`: dx, dy, 0, 1)."""
+    x0, y0, x1, y1 = region
+    h, w = np.shape(uv)[:2]
+    dx, dy = region_offset(region, w, h)
+    return {IMAGE_UV: uv[y0:y1, x0:x1], IMAGE_WEIGHT: weight[y0:y1, x0:x1],
+            IMAGE_OFFSET: np.array([[[dx, dy, 0.0, 1.0]]], np.float32)}
+
+
 def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
     """The RGBA picture of a G-buffer layer for the debug view (alpha 1)."""
     h, w = np.asarray(position).shape[:2]
@@ -408,6 +487,30 @@ _MATH = {"ADD": lambda a, b, c: a + b, "SUBTRACT": lambda a, b, c: a - b, "MULTI
          "MAXIMUM": lambda a, b, c: np.where(a > b, a, b)}  # Blender's: a NaN a gives b
 
 
+def _canvas(values, frame_hw):
+    """The (h, w) an operation works on: that of its array inputs, which must
+    agree (the group never lets the region meet the frame untranslated), else
+    the frame's when all are constants."""
+    sizes = {tuple(np.shape(v)[:2]) for v in values if v is not None and np.ndim(v) >= 2}
+    if len(sizes) > 1:
+        raise ValueError(f"inputs of different sizes meet: {sorted(sizes)} (translate the region first)")
+    return sizes.pop() if sizes else frame_hw
+
+
+def _translated(value, dx: float, dy: float, frame_hw) -> np.ndarray:
+    """Blender's Translate of a region-sized canvas, centred on the frame, by
+    (dx, dy) pixels: the region's pixels in a frame of zeros."""
+    value = np.asarray(value, dtype=np.float32)
+    h, w = frame_hw
+    bh, bw = value.shape[:2]
+    x0, y0 = dx + (w - bw) / 2.0, dy + (h - bh) / 2.0
+    if x0 != int(x0) or y0 != int(y0) or not (0 <= x0 <= w - bw and 0 <= y0 <= h - bh):
+        raise ValueError(f"a {bw}x{bh} region translated by ({dx}, {dy}) does not land on the frame's pixels")
+    out = np.zeros((h, w) + value.shape[2:], np.float32)
+    out[int(y0):int(y0) + bh, int(x0):int(x0) + bw] = value
+    return out
+
+
 def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    map_uv: Callable[[np.ndarray, np.ndarray], np.ndarray],
                    blur: Callable[[np.ndarray, float], np.ndarray],
@@ -419,11 +522,17 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
     Map UV and Fast Gaussian (e.g. a bilinear lookup and an exact Gaussian, to
     check the wiring; Blender's own filters differ slightly). The engine's
-    passes default to black, as an unlinked group input is.
-    Returns the group's outputs by name.
+    passes default to black, as an unlinked group input is. ``images`` as the
+    add-on fills them: :data:`REGION_IMAGES` cut to a region and
+    ``IMAGE_OFFSET`` placing it (:func:`region_images`), or frame-sized with a
+    zero offset (the default when ``IMAGE_OFFSET`` is missing). Operations work
+    on the size of their inputs, as Blender's do, and inputs of two sizes
+    meeting raise. Returns the group's outputs by name.
     """
     base = np.asarray(base, dtype=np.float32)
-    shape = base.shape
+    frame_hw = base.shape[:2]
+    images = dict(images)
+    images.setdefault(IMAGE_OFFSET, np.array([[[0.0, 0.0, 0.0, 1.0]]], np.float32))
     black = np.array((0.0, 0.0, 0.0, 1.0), np.float32)
     group_in = [base, black if specular_light is None else np.asarray(specular_light, np.float32),
                 black if specular_color is None else np.asarray(specular_color, np.float32)]
@@ -447,31 +556,40 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
             value = group_in[index]
         else:
             kind, props, _ = GROUP_NODES[node]
+            if kind == "CompositorNodeSwitch":  # resolved before anything runs: the other side is never read
+                value = inp(node, 1 if switches[node] else 0)
+                cache[key] = value
+                return value
+            n_in = {"CompositorNodeMath": 3, "CompositorNodeMixRGB": 3, "CompositorNodeCombineColor": 4}.get(kind)
+            hw = _canvas([inp(node, i) for i in range(n_in)], frame_hw) if n_in else None
             if kind == "CompositorNodeImage":
                 value = np.asarray(images[props["image"]], dtype=np.float32)
                 if index == 1:
                     value = value[..., 3]
+            elif kind == "CompositorNodeTranslate":
+                dx, dy = (float(np.asarray(inp(node, i), np.float32).flat[0]) for i in (1, 2))
+                value = _translated(inp(node, 0), dx, dy, frame_hw)
             elif kind == "CompositorNodeCombineColor":
-                value = np.stack([np.broadcast_to(np.asarray(inp(node, i), np.float32), shape[:-1])
+                value = np.stack([np.broadcast_to(np.asarray(inp(node, i), np.float32), hw)
                                   for i in range(4)], axis=-1)
             elif kind == "CompositorNodeMapUV":
                 value = map_uv(inp(node, 0), inp(node, 1))
             elif kind == "CompositorNodeBlur":
                 value = blur(inp(node, 0), props["size_x"] * inp(node, 1))
             elif kind == "CompositorNodeSeparateColor":
-                value = _as_colour(inp(node, 0), shape)[..., index]
+                src = inp(node, 0)
+                value = _as_colour(src, tuple(_canvas([src], frame_hw)) + (4,))[..., index]
             elif kind == "CompositorNodeMath":
                 a, b, c = (np.asarray(inp(node, i) if inp(node, i) is not None else 0.0, np.float32)
                            for i in range(3))
                 value = _MATH[props["operation"]](a, b, c)
                 if props["use_clamp"]:
                     value = np.clip(value, 0.0, 1.0)
-                value = np.broadcast_to(value, shape[:-1]).astype(np.float32)
+                value = np.broadcast_to(value, hw).astype(np.float32)
             elif kind == "CompositorNodeMixRGB":
                 fac = np.asarray(inp(node, 0), np.float32)
+                shape = tuple(hw) + (4,)
                 value = _blend(props, fac, _as_colour(inp(node, 1), shape), _as_colour(inp(node, 2), shape))
-            elif kind == "CompositorNodeSwitch":
-                value = inp(node, 1 if switches[node] else 0)
             else:
                 raise ValueError(kind)
         cache[key] = value
