@@ -385,7 +385,9 @@ def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
 
 # Pixels kept around the region's hits: Map UV estimates each pixel's uv
 # derivatives from its neighbours' uv (bilinear reads one pixel away), and a hit
-# at the region's edge must see the same neighbours as in the whole frame.
+# at the region's edge must see the same neighbours as in the whole frame. With
+# 0 the frame's border hits change (tests/blender/test_region.py fails), 1 is
+# enough there; 2 keeps a pixel in hand.
 REGION_PAD = 2
 
 

@@ -1,0 +1,56 @@
+"""The compositor group works on the region of the frame that can change
+(logic/compositing.image_region) and translates its results back: the frame
+must be the one the group gives when it works on the whole frame (as it does
+for the layers EXR), in both of Blender's execution models, on the world's
+path and the passes' path, with the second bounce and the blur."""
+import os
+import re
+
+import numpy as np
+import pytest
+
+from glint_blender_helpers import read_exr
+
+pytestmark = pytest.mark.blender
+
+# python run by driver.py before the render (``scene`` is the scene)
+TEXTURED_WORLD = """
+wt = scene.world.node_tree
+noise = wt.nodes.new("ShaderNodeTexNoise")
+wt.links.new(noise.outputs["Color"], wt.nodes["Background"].inputs["Color"])
+"""
+ROUGH_FLOOR = """
+bpy.data.materials["Mirror"].node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.3
+"""
+METAL_SPHERE = """
+p = bpy.data.materials["Red"].node_tree.nodes["Principled BSDF"]
+p.inputs["Metallic"].default_value = 1.0
+p.inputs["Roughness"].default_value = 0.02
+scene.glint.second_bounce = "ON"
+"""
+CASES = {
+    "tiled-world-mirror": ("TILED", ""),
+    "fullframe-passes-bounce-rough": ("FULL_FRAME", TEXTURED_WORLD + ROUGH_FLOOR + METAL_SPHERE),
+    "tiled-world-bounce-rough": ("TILED", ROUGH_FLOOR + METAL_SPHERE),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_the_region_composites_what_the_whole_frame_does(blender, samples, session_dir, case):
+    mode, python = CASES[case]
+    python += f"\nscene.use_nodes = True\nscene.node_tree.execution_mode = {mode!r}\n"
+    frames, logs = {}, {}
+    for whole in (False, True):
+        out = os.path.join(session_dir, f"region-{case}-{whole}")
+        # the layers EXR needs the whole frame's uv: the group then works on all of it
+        logs[whole] = blender.render(samples["mirror_floor"], out, {
+            "glint": {"backend": "CPU", "write_layers_exr": whole, "enabled": True}, "python": python})
+        frames[whole] = read_exr(os.path.join(out, "frame_0001.exr"))
+    share = [int(m) for m in re.findall(r"composited \d+x\d+ \((\d+)% of the frame\)", logs[False])]
+    assert share and share[0] < 90, logs[False][-2000:]
+    assert re.search(r"composited \d+x\d+ \(100% of the frame\)", logs[True])
+    if "bounce" in case:
+        assert "second bounce not run" not in logs[False]
+    diff = np.abs(frames[False] - frames[True]).max(axis=-1)
+    # bit for bit but for the order of a few float sums in Blender's blur
+    assert diff.max() <= 1e-5, (float(diff.max()), np.argwhere(diff > 1e-5)[:5].tolist())
