@@ -56,8 +56,24 @@ reflects D unblurred, and the hit's own hit is not followed further. It costs
 what the first Map UV costs (the group's largest node), so it runs only where
 reflectors can see each other (``use_bounce``, see :func:`use_second_bounce`).
 
+The region: D is 0 wherever vis is 0, and R differs from D only where lod > 0,
+so the frame changes only inside the bounding box of those pixels
+(:func:`image_region`). The uv and weight images are cut to it, and every node
+that reads only them (both Map UVs, the world path's D) works on that many
+pixels: Blender sizes an operation by its inputs, and Map UV costs about
+100 ns per pixel of its uv input, hit or not. Blender centres a smaller
+canvas on the frame; a Translate by the offset that a 1x1 image holds
+(:func:`region_offset`) puts the result back before it meets anything
+frame-sized (the frame, the engine's passes, the blur). The offset is an
+image, not a node value, because the render composites with a copy of the
+tree taken before Glint knows the frame's region. A debug view or the layers
+EXR wants the whole frame's uv: the region is then the whole frame, and the
+offset 0.
+
 :func:`evaluate_group` runs the same description on numpy arrays, so tests
-check the wiring against the formula without Blender.
+check the wiring against the formula without Blender; it sizes each operation
+by its inputs, as Blender does, and raises where a region meets the frame
+untranslated.
 """
 from __future__ import annotations
 
