@@ -58,8 +58,10 @@ Image specular_weight(const Image& position, const Image& normal, const Image& s
                       const Mat4& projection, int threads) {
   const CameraEye eye = camera_eye(projection);
   env_brdf_table();  // built once, before the workers share it
-  Image out(position.width, position.height);
+  // Zeroed a row at a time by the workers, not by one thread up front.
+  Image out = Image::uninitialized(position.width, position.height);
   parallel_rows(0, out.height, threads, [&](int y) {
+    std::fill(out.px(0, y), out.px(0, y) + static_cast<size_t>(out.width) * 4, 0.0f);
     for (int x = 0; x < out.width; ++x) {
       const float* p = position.px(x, y);
       const float* s = specular.px(x, y);
