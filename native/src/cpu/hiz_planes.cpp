@@ -29,7 +29,7 @@ float miss(const float* p, const float* a1, const float* a2) {
 // predicts the texel's depth better (the high one on a tie), always from low
 // to high so both axes' differences keep one handedness. False when neither
 // neighbour is seen.
-bool axis_difference(const Image& position, const float* p, int x, int y, int ax, int ay, float e[3]) {
+__attribute__((always_inline)) inline bool axis_difference(const Image& position, const float* p, int x, int y, int ax, int ay, float e[3]) {
   const float* lo = neighbour(position, x, y, ax, ay, -1);
   const float* hi = neighbour(position, x, y, ax, ay, 1);
   if (hi && lo &&
