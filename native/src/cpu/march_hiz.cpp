@@ -104,9 +104,9 @@ inline bool texel_plane(const Image& position, const HizPlanes& normal, const Hi
 // Base level: each seen texel's [nearest, farthest + thickness] view distance
 // over its footprint.
 void base_range(const Image& position, const HizPlanes& normal, const Image* back, const HizCamera& cam,
-                float thickness, int x, int y, float out[2]) {
+                float thickness, bool seen, int x, int y, float out[2]) {
   const float* p = position.px(x, y);
-  if (!texel_seen(p)) {
+  if (!seen) {
     out[0] = kInf;
     out[1] = -kInf;
     return;
@@ -423,11 +423,20 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
   planes.width = position.width;
   planes.height = position.height;
   planes.xyz.resize(position.pixel_count() * 3);
-  parallel_rows(0, position.height, threads, [&](int y) {
-    hiz_plane_normals_row(position, normal, y, planes);
-    float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
-    for (int x = 0; x < position.width; ++x)
-      base_range(position, planes, back_position, cam, thickness, x, y, row + 2 * x);
+  // Blocks of rows, each with the seen flags of its rows and the two on
+  // either side that the plane normals look at.
+  constexpr int kBlock = 16;
+  const int height = position.height;
+  parallel_rows(0, (height + kBlock - 1) / kBlock, threads, [&](int b) {
+    const int y0 = b * kBlock, y1 = std::min(height, y0 + kBlock);
+    SeenRows seen;
+    fill_seen_rows(position, std::max(0, y0 - 2), std::min(height, y1 + 2), seen);
+    for (int y = y0; y < y1; ++y) {
+      hiz_plane_normals_row(position, normal, seen, y, planes);
+      float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
+      for (int x = 0; x < position.width; ++x)
+        base_range(position, planes, back_position, cam, thickness, seen.at(x, y), x, y, row + 2 * x);
+    }
   });
   for (int l = 1; l < p.levels; ++l) {
     const int pw = p.width[l - 1], ph = p.height[l - 1];
