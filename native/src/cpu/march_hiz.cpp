@@ -361,6 +361,17 @@ void march_hiz(const MarchSetup& s, const HizPlanes& planes, const HizPyramid& p
       if (level > 0) {
         known |= 1u << level;
         --level;  // something in this cell may meet the ray: look closer
+        if (level == 0) {
+          // Its texels' planes and positions are what a texel test reads next,
+          // from far in memory: ask for both of its rows now. Loads only.
+          const int x0 = std::min(2 * i, pos.width - 1), y0 = std::min(2 * j, pos.height - 1);
+          const int y1 = std::min(y0 + 1, pos.height - 1);
+          __builtin_prefetch(planes.px(x0, y0));
+          __builtin_prefetch(planes.px(x0, y1));
+          __builtin_prefetch(pos.px(x0, y0));
+          __builtin_prefetch(pos.px(x0, y1));
+          __builtin_prefetch(pyr.cell(0, x0, y1));
+        }
         continue;
       }
       float th;
