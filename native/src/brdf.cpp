@@ -88,21 +88,7 @@ const std::vector<float>& env_brdf_table() {
 }
 
 void env_brdf(float n_dot_v, float alpha, float* a, float* b) {
-  const std::vector<float>& t = env_brdf_table();
-  const int n = kEnvBrdfSize;
-  const float scale = static_cast<float>(n - 1);
-  auto clamp01 = [](float v) { return v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f; };
-  const float x = clamp01(n_dot_v) * scale;
-  const float y = std::sqrt(clamp01(alpha)) * scale;
-  const int x0 = std::min(static_cast<int>(x), n - 2), y0 = std::min(static_cast<int>(y), n - 2);
-  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-  for (int c = 0; c < 2; ++c) {
-    const float v00 = t[2 * (y0 * n + x0) + c], v10 = t[2 * (y0 * n + x0 + 1) + c];
-    const float v01 = t[2 * ((y0 + 1) * n + x0) + c], v11 = t[2 * ((y0 + 1) * n + x0 + 1) + c];
-    const float bottom = v00 * (1.0f - fx) + v10 * fx;
-    const float top = v01 * (1.0f - fx) + v11 * fx;
-    (c == 0 ? *a : *b) = bottom * (1.0f - fy) + top * fy;
-  }
+  env_brdf_lookup(env_brdf_table().data(), n_dot_v, alpha, a, b);
 }
 
 }  // namespace glint

@@ -2,7 +2,10 @@
 // compositor outside the core (glint/composite.h).
 #include "glint/composite.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "glint/errors.h"
@@ -10,9 +13,30 @@
 
 namespace glint {
 
+namespace {
+
+// Pooled (glint/image.h): a frame's masks come back already mapped.
+using Mask = std::vector<unsigned char, PixelAllocator<unsigned char>>;
+
+// No pixel in [x, x + 8) of row y has a known 3x3 neighbour: the ten bytes
+// x - 1 .. x + 8 of rows y - 1 .. y + 1 are all zero. Needs 1 <= x, x + 9 <= w.
+inline bool none_near8(const unsigned char* m, int w, int h, int x, int y) {
+  uint64_t any = 0;
+  for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy) {
+    const unsigned char* row = m + static_cast<size_t>(yy) * w;
+    uint64_t a, b;
+    std::memcpy(&a, row + x - 1, 8);
+    std::memcpy(&b, row + x + 1, 8);
+    any |= a | b;
+  }
+  return any == 0;
+}
+
+}  // namespace
+
 void continue_missing_uv(Image& uv, int rings, int threads) {
   const int w = uv.width, h = uv.height;
-  std::vector<unsigned char> known(uv.pixel_count()), before(uv.pixel_count());
+  Mask known(uv.pixel_count()), before(uv.pixel_count());
   parallel_rows(0, h, threads, [&](int y) {
     for (int x = 0; x < w; ++x) known[static_cast<size_t>(y) * w + x] = uv.px(x, y)[2] > 0.0f;
   });
@@ -24,6 +48,11 @@ void continue_missing_uv(Image& uv, int rings, int threads) {
     parallel_rows(0, h, threads, [&](int y) {
       bool any = false;
       for (int x = 0; x < w; ++x) {
+        // Most of a frame is far from any hit: skip it eight pixels at a time.
+        if (x >= 1 && x + 9 <= w && none_near8(before.data(), w, h, x, y)) {
+          x += 7;
+          continue;
+        }
         if (before[static_cast<size_t>(y) * w + x]) continue;
         float acc[2] = {0.0f, 0.0f}, count = 0.0f;
         for (int dy = -1; dy <= 1; ++dy) {
@@ -79,13 +108,14 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
       const float* s = spec.px(x, y);
       const float lod = is_reflective(s) ? cone_lod_at(x, y, spec.width, spec.height, out.uv.px(x, y), s) : 0.0f;
       out.weight.px(x, y)[3] = lod;
+      // The alpha the caller gets; continue_missing_uv() reads only uv and vis.
+      out.uv.px(x, y)[3] = 1.0f;
       any = any || lod > 0.0f;
     }
     if (any) rough.store(true, std::memory_order_relaxed);
   });
   out.any_rough = rough.load();
   continue_missing_uv(out.uv, 2, threads);
-  for (size_t i = 0; i < out.uv.pixel_count(); ++i) out.uv.data[i * 4 + 3] = 1.0f;
   return out;
 }
 

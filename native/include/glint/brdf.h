@@ -6,6 +6,8 @@
 // importance-sampling variables; both backends read the same table with the
 // same bilinear rule. docs/look-core.md has the integrals and the error.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace glint {
@@ -24,5 +26,24 @@ const std::vector<float>& env_brdf_table();
 // A and B at any N.V in [0, 1] and GGX alpha in [0, 1] (clamped): bilinear
 // between the nodes, as shaders/specular_weight.frag reads them.
 void env_brdf(float n_dot_v, float alpha, float* a, float* b);
+
+// env_brdf() on a table already at hand (env_brdf_table().data()), inline:
+// the CPU weight asks it once per reflective pixel.
+inline void env_brdf_lookup(const float* t, float n_dot_v, float alpha, float* a, float* b) {
+  const int n = kEnvBrdfSize;
+  const float scale = static_cast<float>(n - 1);
+  auto clamp01 = [](float v) { return v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f; };
+  const float x = clamp01(n_dot_v) * scale;
+  const float y = std::sqrt(clamp01(alpha)) * scale;
+  const int x0 = std::min(static_cast<int>(x), n - 2), y0 = std::min(static_cast<int>(y), n - 2);
+  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+  for (int c = 0; c < 2; ++c) {
+    const float v00 = t[2 * (y0 * n + x0) + c], v10 = t[2 * (y0 * n + x0 + 1) + c];
+    const float v01 = t[2 * ((y0 + 1) * n + x0) + c], v11 = t[2 * ((y0 + 1) * n + x0 + 1) + c];
+    const float bottom = v00 * (1.0f - fx) + v10 * fx;
+    const float top = v01 * (1.0f - fx) + v11 * fx;
+    (c == 0 ? *a : *b) = bottom * (1.0f - fy) + top * fy;
+  }
+}
 
 }  // namespace glint

@@ -79,7 +79,11 @@ inline bool texel_seen(const float* p) {
 }
 
 // A pixel is reflective when its specular amount is positive (and finite).
-bool is_reflective(const float* spec);
+// Inline: a frame asks it of every pixel several times over.
+inline bool is_reflective(const float* spec) {
+  const float amount = specular_amount(spec);
+  return amount > 0.0f && amount - amount == 0.0f;
+}
 
 // Material specular, the book's mapping: Blender Internal hardness 1..511,
 // shininess = hardness / 4 (511 -> 127.75), alpha = clamp(shininess / 127.75, 0, 1).

@@ -290,11 +290,6 @@ class CpuBackend final : public Backend {
 
 }  // namespace
 
-bool is_reflective(const float* spec) {
-  const float amount = specular_amount(spec);
-  return amount > 0.0f && amount - amount == 0.0f;
-}
-
 float shininess_to_alpha(float shininess) {
   const float a = shininess / kMaxShininess;
   if (!(a > 0.0f)) return 0.0f;

@@ -49,6 +49,16 @@ struct HizPlanes {
   float* px(int x, int y) { return xyz.data() + (static_cast<size_t>(y) * width + x) * 3; }
 };
 
+// Whether each texel of rows [y0, y0 + rows) is seen (texel_seen()), a byte
+// each: the plane normals ask it of up to eight neighbours per texel, and
+// the base of each texel, so a block of rows asks each texel once.
+struct SeenRows {
+  int y0 = 0, width = 0;
+  std::vector<unsigned char> bytes;
+  bool at(int x, int y) const { return bytes[static_cast<size_t>(y - y0) * width + x] != 0; }
+};
+void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out);
+
 // The normal of each texel's tangent plane, for the pyramid's base and the
 // texel test (never the ray's direction, which follows the shading normal):
 // the surface's geometric normal from the position buffer, so that a normal
@@ -56,8 +66,10 @@ struct HizPlanes {
 // the seen neighbour whose view distance is closer to the texel's own (so a
 // silhouette does not bend it); the shading normal where an axis has no seen
 // neighbour or the texel none usable. xyz unit length, facing the side the
-// shading normal is on. Row y of them, into `out` (sized to the image).
-void hiz_plane_normals_row(const Image& position, const Image& normal, int y, HizPlanes& out);
+// shading normal is on. Row y of them, into `out` (sized to the image);
+// `seen` covers rows y - 2 .. y + 2 (those inside the image).
+void hiz_plane_normals_row(const Image& position, const Image& normal, const SeenRows& seen, int y,
+                           HizPlanes& out);
 
 // The pyramid, and into `planes` the plane normals above that its base and
 // the walk use: both in one pass over the G-buffer, a row of normals and

@@ -10,11 +10,10 @@ namespace glint::cpu {
 namespace {
 
 // The seen texel `k` steps from (x, y) along (ax, ay), or null.
-const float* neighbour(const Image& position, int x, int y, int ax, int ay, int k) {
+inline const float* neighbour(const Image& position, const SeenRows& seen, int x, int y, int ax, int ay, int k) {
   const int nx = x + k * ax, ny = y + k * ay;
   if (nx < 0 || ny < 0 || nx >= position.width || ny >= position.height) return nullptr;
-  const float* q = position.px(nx, ny);
-  return texel_seen(q) ? q : nullptr;
+  return seen.at(nx, ny) ? position.px(nx, ny) : nullptr;
 }
 
 // How far the depth one side predicts for the texel misses its own: the line
@@ -29,11 +28,13 @@ float miss(const float* p, const float* a1, const float* a2) {
 // predicts the texel's depth better (the high one on a tie), always from low
 // to high so both axes' differences keep one handedness. False when neither
 // neighbour is seen.
-bool axis_difference(const Image& position, const float* p, int x, int y, int ax, int ay, float e[3]) {
-  const float* lo = neighbour(position, x, y, ax, ay, -1);
-  const float* hi = neighbour(position, x, y, ax, ay, 1);
+__attribute__((always_inline)) inline bool axis_difference(const Image& position, const SeenRows& seen,
+                                                           const float* p, int x, int y, int ax, int ay, float e[3]) {
+  const float* lo = neighbour(position, seen, x, y, ax, ay, -1);
+  const float* hi = neighbour(position, seen, x, y, ax, ay, 1);
   if (hi && lo &&
-      miss(p, lo, neighbour(position, x, y, ax, ay, -2)) < miss(p, hi, neighbour(position, x, y, ax, ay, 2)))
+      miss(p, lo, neighbour(position, seen, x, y, ax, ay, -2)) <
+          miss(p, hi, neighbour(position, seen, x, y, ax, ay, 2)))
     hi = nullptr;
   if (hi) {
     for (int k = 0; k < 3; ++k) e[k] = hi[k] - p[k];
@@ -45,17 +46,18 @@ bool axis_difference(const Image& position, const float* p, int x, int y, int ax
   return true;
 }
 
-void plane_normal(const Image& position, const Image& normal, int x, int y, float out[4]) {
+void plane_normal(const Image& position, const Image& normal, const SeenRows& seen, int x, int y, float out[4]) {
   const float* s = normal.px(x, y);
   out[0] = s[0];
   out[1] = s[1];
   out[2] = s[2];
   const float* p = position.px(x, y);
-  if (!texel_seen(p) || !(s[0] - s[0] == 0.0f && s[1] - s[1] == 0.0f && s[2] - s[2] == 0.0f) ||
+  if (!seen.at(x, y) || !(s[0] - s[0] == 0.0f && s[1] - s[1] == 0.0f && s[2] - s[2] == 0.0f) ||
       (s[0] == 0.0f && s[1] == 0.0f && s[2] == 0.0f))
     return;
   float ex[3], ey[3];
-  if (!axis_difference(position, p, x, y, 1, 0, ex) || !axis_difference(position, p, x, y, 0, 1, ey)) return;
+  if (!axis_difference(position, seen, p, x, y, 1, 0, ex) || !axis_difference(position, seen, p, x, y, 0, 1, ey))
+    return;
   const float c[3] = {ex[1] * ey[2] - ex[2] * ey[1], ex[2] * ey[0] - ex[0] * ey[2], ex[0] * ey[1] - ex[1] * ey[0]};
   const float len2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
   // Collinear neighbours, or differences too small or large for a float square.
@@ -69,8 +71,18 @@ void plane_normal(const Image& position, const Image& normal, int x, int y, floa
 
 }  // namespace
 
-void hiz_plane_normals_row(const Image& position, const Image& normal, int y, HizPlanes& out) {
-  for (int x = 0; x < position.width; ++x) plane_normal(position, normal, x, y, out.px(x, y));
+void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out) {
+  out.y0 = y0;
+  out.width = position.width;
+  out.bytes.resize(static_cast<size_t>(y1 - y0) * position.width);
+  for (int y = y0; y < y1; ++y)
+    for (int x = 0; x < position.width; ++x)
+      out.bytes[static_cast<size_t>(y - y0) * position.width + x] = texel_seen(position.px(x, y));
+}
+
+void hiz_plane_normals_row(const Image& position, const Image& normal, const SeenRows& seen, int y,
+                           HizPlanes& out) {
+  for (int x = 0; x < position.width; ++x) plane_normal(position, normal, seen, x, y, out.px(x, y));
 }
 
 }  // namespace glint::cpu

@@ -57,9 +57,11 @@ void bilinear(const Image& img, float u, float v, float out[4]) {
 Image specular_weight(const Image& position, const Image& normal, const Image& specular,
                       const Mat4& projection, int threads) {
   const CameraEye eye = camera_eye(projection);
-  env_brdf_table();  // built once, before the workers share it
-  Image out(position.width, position.height);
+  const float* table = env_brdf_table().data();  // built once, before the workers share it
+  // Zeroed a row at a time by the workers, not by one thread up front.
+  Image out = Image::uninitialized(position.width, position.height);
   parallel_rows(0, out.height, threads, [&](int y) {
+    std::fill(out.px(0, y), out.px(0, y) + static_cast<size_t>(out.width) * 4, 0.0f);
     for (int x = 0; x < out.width; ++x) {
       const float* p = position.px(x, y);
       const float* s = specular.px(x, y);
@@ -83,7 +85,7 @@ Image specular_weight(const Image& position, const Image& normal, const Image& s
       const float dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
       const float n_dot_v = clamp01(-(dn * inv_n * inv_d));
       float a, b;
-      env_brdf(n_dot_v, ggx_alpha_of(s), &a, &b);
+      env_brdf_lookup(table, n_dot_v, ggx_alpha_of(s), &a, &b);
       float* o = out.px(x, y);
       for (int k = 0; k < 3; ++k) o[k] = s[k] * a + b;
       o[3] = (o[0] + o[1] + o[2]) / 3.0f;
