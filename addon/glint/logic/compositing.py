@@ -291,7 +291,8 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("weight_image", 0, "weight_to_frame", 0),
     ("weight_to_frame", 0, "sep_weight_frame", 0),
 ]
-for _t in ("world_to_frame", "weighted_to_frame", "uv_to_frame", "bounce_to_frame", "weight_to_frame"):
+# every Translate moves by the region's offset
+for _t in [n for n, (kind, _, _) in GROUP_NODES.items() if kind == "CompositorNodeTranslate"]:
     GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
 for _j in range(1, len(BLUR_LEVELS) + 1):
     _below = "blur_source" if _j == 1 else f"mix_{_j - 1}"
