@@ -1,8 +1,13 @@
 // march="exact": every pixel's mirror ray traced against the scene's own
-// triangles with Embree 3, the answer every screen-space march approximates.
+// triangles with Embree (3 or 4, whichever the distribution has), the answer
+// every screen-space march approximates.
 // The rules are SPEC's: the first hit within max_distance, reported as
 // (u, v, 1, 1) only where the camera sees that point; no fades.
+#if GLINT_EMBREE_MAJOR >= 4
+#include <embree4/rtcore.h>
+#else
 #include <embree3/rtcore.h>
+#endif
 
 #include <cmath>
 #include <cstring>
@@ -86,8 +91,6 @@ bool first_hit(RTCScene scene, const Planes& planes, D3 origin, D3 dir, double t
   // A handful of coplanar neighbours at most; past that the ray is skimming
   // its own surface and reflects nothing.
   for (int attempt = 0; attempt < 8; ++attempt) {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
     rh.ray.org_x = float(origin.x), rh.ray.org_y = float(origin.y), rh.ray.org_z = float(origin.z);
     rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
@@ -99,7 +102,13 @@ bool first_hit(RTCScene scene, const Planes& planes, D3 origin, D3 dir, double t
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+#if GLINT_EMBREE_MAJOR >= 4
+    rtcIntersect1(scene, &rh);  // Embree 4 folded the context into optional arguments
+#else
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
     rtcIntersect1(scene, &ctx, &rh);
+#endif
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     if (planes.distance(rh.hit.primID, origin) > kSurfaceTolerance * scale) {
       t_hit = rh.ray.tfar;
