@@ -75,6 +75,9 @@ def new_scene(name, engine, size):
         for block in list(coll):
             if block.users == 0:
                 coll.remove(block)
+    from glint.host import engines  # this Blender's name for Eevee, and its own reflections
+    if engine == "BLENDER_EEVEE":
+        engine = engines.eevee_id()
     r = scene.render
     r.engine = engine
     r.resolution_x, r.resolution_y = size
@@ -83,9 +86,9 @@ def new_scene(name, engine, size):
     r.filepath = "//render/" + name + "_"
     r.dither_intensity = 0.0  # reproducible 8-bit output
     scene.frame_start = scene.frame_end = 1
-    if engine == "BLENDER_EEVEE":
+    if engines.is_eevee(engine):
         scene.eevee.taa_render_samples = 16
-        scene.eevee.use_ssr = False  # Glint provides the reflections
+        engines.set_eevee_traces_reflections(scene, False)  # Glint provides the reflections
     elif engine == "CYCLES":
         scene.cycles.samples = 16
         scene.cycles.use_denoising = False

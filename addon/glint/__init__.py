@@ -23,9 +23,10 @@ if "bpy" in locals():
     import importlib
 
     for _name in ("logic.materials", "logic.projection", "logic.frustum", "logic.settings",
-                  "logic.progress", "logic.geometry", "logic.compositing", "native", "state",
-                  "gather", "compositor", "frame", "properties", "preferences", "operators", "ui",
-                  "handlers"):
+                  "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement",
+                  "logic.compositing", "host", "host.engines", "host.nodes", "native", "state",
+                  "gather", "compositor", "frame", "measure", "properties", "preferences", "operators",
+                  "ui", "handlers"):
         importlib.reload(importlib.import_module(f"{__name__}.{_name}"))
 
 import bpy  # noqa: E402,F401  (its presence in locals() marks a reload)

@@ -16,6 +16,7 @@ import bpy
 import numpy as np
 
 from . import gather
+from .host import engines, nodes as host_nodes
 from .logic import compositing as cg
 from .logic import world as world_logic
 from .state import STATE
@@ -23,9 +24,11 @@ from .state import STATE
 LAYOUT_KEY = "glint_layout"
 
 
-# A group saved with another hash (an older description) is rebuilt.
+# A group saved with another hash (an older description, or lowered for a
+# Blender whose nodes take their options otherwise) is rebuilt.
 LAYOUT_HASH = hashlib.sha1((repr(sorted(cg.GROUP_NODES.items())) + repr(cg.GROUP_LINKS) +
-                            repr(cg.GROUP_OUTPUTS)).encode()).hexdigest()[:12]
+                            repr(cg.GROUP_OUTPUTS) + repr(host_nodes.options_are_sockets())
+                            ).encode()).hexdigest()[:12]
 
 
 # ----------------------------------------------------------------------------
@@ -134,23 +137,6 @@ def clear_images(only_pass_through: bool = False) -> None:
 # The node group
 
 
-def _new_socket(tree, name: str, socket_type: str, in_out: str):
-    if hasattr(tree, "interface"):  # Blender 4.0+
-        return tree.interface.new_socket(name, in_out=in_out, socket_type=socket_type)
-    sockets = tree.inputs if in_out == "INPUT" else tree.outputs
-    return sockets.new(socket_type, name)
-
-
-def _sockets(tree):
-    """([(name, socket type)] of the inputs, of the outputs) of a node group."""
-    if hasattr(tree, "interface"):  # Blender 4.0+
-        items = [i for i in tree.interface.items_tree if i.item_type == "SOCKET"]
-        return ([(i.name, i.socket_type) for i in items if i.in_out == "INPUT"],
-                [(i.name, i.socket_type) for i in items if i.in_out == "OUTPUT"])
-    return ([(i.name, i.bl_socket_idname) for i in tree.inputs],
-            [(o.name, o.bl_socket_idname) for o in tree.outputs])
-
-
 def find_group():
     """Glint's node group, or None: a compositor group carrying ``LAYOUT_KEY`` (every
     group Glint builds does), the one named ``GROUP_NAME`` if there are several.
@@ -175,34 +161,32 @@ def build_group():
     # when they are already the ones wanted: clearing them would cut every link
     # the scenes' trees make to the group node (the Composite's input with them),
     # and the upgraded file would render black.
-    if _sockets(group) != (list(cg.GROUP_INPUTS), list(cg.GROUP_OUTPUTS)):
-        if hasattr(group, "interface"):
-            group.interface.clear()
-        else:
-            group.inputs.clear()
-            group.outputs.clear()
+    if host_nodes.group_sockets(group) != (list(cg.GROUP_INPUTS), list(cg.GROUP_OUTPUTS)):
+        host_nodes.clear_group_sockets(group)
         for name, kind in cg.GROUP_INPUTS:
-            sock = _new_socket(group, name, kind, "INPUT")
+            sock = host_nodes.new_group_socket(group, name, kind, "INPUT")
             if name != "Image":  # an engine without the pass adds nothing to replace
                 sock.default_value = (0.0, 0.0, 0.0, 1.0)
         for name, kind in cg.GROUP_OUTPUTS:
-            _new_socket(group, name, kind, "OUTPUT")
+            host_nodes.new_group_socket(group, name, kind, "OUTPUT")
     nodes = {cg.GROUP_IN: group.nodes.new("NodeGroupInput"), cg.GROUP_OUT: group.nodes.new("NodeGroupOutput")}
     nodes[cg.GROUP_IN].location = (-900, 0)
     nodes[cg.GROUP_OUT].location = (1300, 0)
     for i, (name, (kind, props, defaults)) in enumerate(cg.GROUP_NODES.items()):
-        node = group.nodes.new(kind)
+        node = host_nodes.new_node(group, kind, props, image_of=ensure_image)
         node.name = node.label = name
         node.location = (-600 + 250 * (i % 8), 600 - 220 * (i // 8))
-        for key, value in props.items():
-            if key == "image":
-                value = ensure_image(value)
-            setattr(node, key, value)
         for index, value in defaults.items():
-            node.inputs[index].default_value = value
+            host_nodes.input_socket(node, kind, index).default_value = value
         nodes[name] = node
+
+    def kind(name):
+        return cg.GROUP_NODES[name][0] if name in cg.GROUP_NODES else None
+
     for src, so, dst, di in cg.GROUP_LINKS:
-        group.links.new(nodes[src].outputs[so], nodes[dst].inputs[di])
+        out = nodes[src].outputs[so] if kind(src) is None else host_nodes.output_socket(nodes[src], kind(src), so)
+        inp = nodes[dst].inputs[di] if kind(dst) is None else host_nodes.input_socket(nodes[dst], kind(dst), di)
+        group.links.new(out, inp)
     group[LAYOUT_KEY] = LAYOUT_HASH
     return group
 
@@ -217,8 +201,8 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
         return
     for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular).items():
         node = group.nodes.get(name)
-        if node is not None and node.check != check:
-            node.check = check
+        if node is not None:
+            host_nodes.set_switch(node, check)
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:
@@ -270,9 +254,7 @@ def _render_layers_node(tree, scene, view_layer):
 
 
 def _is_default_tree(tree) -> bool:
-    kinds = sorted(n.bl_idname for n in tree.nodes)
-    return kinds in (["CompositorNodeComposite", "CompositorNodeRLayers"],
-                     ["CompositorNodeComposite", "CompositorNodeRLayers", "CompositorNodeViewer"])
+    return tuple(sorted(n.bl_idname for n in tree.nodes)) in host_nodes.default_tree_kinds()
 
 
 class SetupIncomplete(Exception):
@@ -309,12 +291,12 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
 
     glint = scene.glint
     turned_on = []
-    if not scene.use_nodes or scene.node_tree is None:
+    if host_nodes.tree_switch_is_off(scene):
         change("the compositor's nodes are off")
-        scene.use_nodes = True
+        host_nodes.scene_tree(scene, create=True)
         glint.owns_use_nodes = True
         turned_on.append("the compositor's nodes (Use Nodes)")
-    tree = scene.node_tree
+    tree = host_nodes.scene_tree(scene)
     group = find_group()
     if not _group_is_current(group):
         change("Glint's node group is missing or out of date")
@@ -343,13 +325,13 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     elif gnode.node_tree != group:
         change("the Glint node uses another node group")
         gnode.node_tree = group
-    # The frame is what the Composite node receives: a tree without one (an old
-    # file's Viewer-only tree) would write the bare render, or refuse to render.
-    if not any(n.bl_idname == "CompositorNodeComposite" for n in tree.nodes):
+    # The frame is what the Composite node (5.0+: the Group Output) receives:
+    # a tree without one (an old file's Viewer-only tree) would write the bare
+    # render, or refuse to render.
+    if not host_nodes.frame_outputs(tree):
         change("the compositor has no Composite node")
-        comp = tree.nodes.new("CompositorNodeComposite")
-        comp.location = (gnode.location.x + 300, gnode.location.y + 200)
-        tree.links.new(gnode.outputs["Image"], comp.inputs["Image"])
+        sock = host_nodes.add_frame_output(tree, (gnode.location.x + 300, gnode.location.y + 200))
+        tree.links.new(gnode.outputs["Image"], sock)
         turned_on.append("a Composite node fed by Glint")
     # The group is never muted: a frame Glint does not handle gets zeroed images
     # instead (clear_images), which the render sees; older versions muted it.
@@ -365,10 +347,10 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
                  STATE.specular_source == world_logic.SOURCE_WORLD)
     # A Composite node that receives nothing writes a black frame: feed it
     # Glint's image (a group rebuilt by an older Glint could leave it so).
-    for comp in (n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"):
-        if not comp.inputs["Image"].links:
+    for sock in host_nodes.frame_outputs(tree):
+        if not sock.links:
             change("the Composite node receives nothing")
-            tree.links.new(gnode.outputs["Image"], comp.inputs["Image"])
+            tree.links.new(gnode.outputs["Image"], sock)
     _ensure_exr_node(scene, tree, gnode, change)
     if not scene.render.use_compositing:
         # A value, not a structure: set even from the render thread, before the
@@ -439,7 +421,7 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
     Specular Light and Specular Color passes; an engine that does not write them
     leaves the sockets unavailable and the group's inputs at black (nothing
     replaced). Records the source in ``STATE.specular_source``."""
-    eevee = scene.render.engine == "BLENDER_EEVEE"
+    eevee = engines.is_eevee(scene.render.engine)
     light_in, colour_in = (group_input for _, group_input, _ in cg.ENGINE_PASSES)
     STATE.specular_source = None
     if not eevee:
@@ -448,18 +430,15 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
             # Set up under Eevee: a black colour makes S = 0 (the engine has no
             # world specular to replace) with no change of structure, which a
             # render thread may not make.
-            if tuple(rgb.outputs[0].default_value) != (0.0, 0.0, 0.0, 1.0):
-                rgb.outputs[0].default_value = (0.0, 0.0, 0.0, 1.0)
+            host_nodes.set_rgb_value(rgb, (0.0, 0.0, 0.0, 1.0))
             return
-    source, colour = world_logic.specular_source(describe_world(scene.world), scene.eevee.use_ssr) if eevee else \
-        (world_logic.SOURCE_PASSES, None)
+    source, colour = (world_logic.specular_source(describe_world(scene.world), engines.eevee_traces_reflections(scene))
+                      if eevee else (world_logic.SOURCE_PASSES, None))
     if source == world_logic.SOURCE_WORLD:
-        rgb = _ensure_node(tree, cg.WORLD_COLOUR_NODE, "CompositorNodeRGB", (gnode.location.x - 300,
+        rgb = _ensure_node(tree, cg.WORLD_COLOUR_NODE, host_nodes.idname("rgb"), (gnode.location.x - 300,
                                                                              gnode.location.y - 250),
                            change, "the world colour node is missing")
-        value = (*colour, 1.0)
-        if tuple(rgb.outputs[0].default_value) != value:  # a value: written from the render thread too
-            rgb.outputs[0].default_value = value
+        host_nodes.set_rgb_value(rgb, (*colour, 1.0))  # a value: written from the render thread too
         weight = _ensure_node(tree, cg.WORLD_WEIGHT_NODE, "CompositorNodeImage", (gnode.location.x - 300,
                                                                                  gnode.location.y - 450),
                               change, "the world weight node is missing")
@@ -476,9 +455,10 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
             if tree.nodes.get(name) is not None:
                 change("the world colour nodes are no longer wanted")
                 tree.nodes.remove(tree.nodes[name])
-        for output, group_input, _ in cg.ENGINE_PASSES:
-            if output in rl.outputs:
-                _link_once(tree, rl.outputs[output], gnode.inputs[group_input], change,
+        for pass_key, group_input, _ in cg.ENGINE_PASSES:
+            output = host_nodes.pass_output(rl, pass_key)
+            if output is not None:
+                _link_once(tree, output, gnode.inputs[group_input], change,
                            f"the engine's {group_input} pass is not linked to the Glint node")
         if eevee:
             off = [flag for _, _, flag in cg.ENGINE_PASSES if not getattr(view_layer, flag)]
@@ -516,25 +496,18 @@ def _ensure_exr_node(scene, tree, gnode, change) -> None:
         return
     if node is None:
         change("the layers EXR node is missing")
-        node = tree.nodes.new("CompositorNodeOutputFile")
+        node = host_nodes.new_exr_output(tree, [slot for slot, _ in cg.EXR_LAYERS],
+                                         (gnode.location.x + 300, gnode.location.y - 300))
         node.name = cg.EXR_NODE_NAME
         node.label = "Glint layers (EXR)"
-        node.location = (gnode.location.x + 300, gnode.location.y - 300)
-        node.format.file_format = "OPEN_EXR_MULTILAYER"
-        node.format.color_depth = "32"
-        node.format.exr_codec = "ZIP"
-        node.layer_slots.clear()
-        for slot, _ in cg.EXR_LAYERS:
-            node.layer_slots.new(slot)
         for slot, output in cg.EXR_LAYERS:
-            tree.links.new(gnode.outputs[output], node.inputs[slot])
-    if node.base_path != exr_base_path(scene):
-        node.base_path = exr_base_path(scene)
+            tree.links.new(gnode.outputs[output], host_nodes.exr_input(node, slot))
+    host_nodes.set_exr_path(node, exr_base_path(scene))
 
 
 def remove(scene) -> None:
     """Take Glint out of the compositor, reconnecting what it sat between."""
-    tree = scene.node_tree
+    tree = host_nodes.scene_tree(scene)
     glint = scene.glint
     if tree is not None:
         gnode = tree.nodes.get(cg.GROUP_NODE_NAME)
@@ -550,7 +523,7 @@ def remove(scene) -> None:
             if node is not None:
                 tree.nodes.remove(node)
         if glint.owns_use_nodes and _is_default_tree(tree):
-            scene.use_nodes = False
+            host_nodes.release_tree(scene)
     if glint.owns_use_compositing:
         scene.render.use_compositing = False
     _release_specular_passes(scene, target_view_layer(scene))

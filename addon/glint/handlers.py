@@ -33,13 +33,13 @@ import traceback
 import bpy
 from bpy.app.handlers import persistent
 
-from . import compositor, frame, native
+from . import compositor, frame, host, native
 from .state import STATE, FrameReport, log
 
 _job = {"scene": None, "target": None, "done": False, "skip": None, "ui_notice": None}
 
 # The core already named in the log (once per session, and again if it changes).
-_announced = {"core": None}
+_announced = {"core": None, "host": False}
 
 # How often the main thread looks for queued work (reports, redraws, repairs).
 TICK_SECONDS = 0.2
@@ -76,6 +76,11 @@ def on_render_init(scene, *args):
         return
     _job["scene"] = scene.name
     STATE.cancel.clear()
+    if not _announced["host"]:
+        _announced["host"] = True
+        note = host.untested_note()
+        if note:
+            log(note)
     if native.load() is None:
         log(f"reflections are off for this render: {native.error()}")
     elif _announced.get("core") != native.origin():

@@ -82,6 +82,7 @@ make_host() {
     { tail -20 "$cache/$name.debootstrap.log" >&2; die "debootstrap $suite failed (log: $cache/$name.debootstrap.log)"; }
   # sid's Release file can read as expired against this machine's clock.
   printf 'Acquire::Check-Valid-Until "false";\nAcquire::Languages "none";\n' >"$tmp/etc/apt/apt.conf.d/99glint"
+  ln -sf ../proc/self/mounts "$tmp/etc/mtab"  # Blender lists the mounted file systems at start
   printf 'path-exclude=/usr/share/doc/*\npath-exclude=/usr/share/man/*\npath-exclude=/usr/share/locale/*\n' \
     >"$tmp/etc/dpkg/dpkg.cfg.d/99glint-nodoc"
   mapfile -t pkgs < <(packages "$name")

@@ -11,7 +11,11 @@ globals, after this.
 def apply(scene, cfg):
     r = scene.render
     if "engine" in cfg:
-        r.engine = cfg["engine"]
+        engine = cfg["engine"]
+        if engine == "BLENDER_EEVEE":  # the tests' name for whatever Eevee this Blender has
+            from glint.host import engines
+            engine = engines.eevee_id()
+        r.engine = engine
     if "size" in cfg:
         r.resolution_x, r.resolution_y = cfg["size"]
     r.resolution_percentage = cfg.get("percentage", 100)

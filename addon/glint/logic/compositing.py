@@ -119,11 +119,12 @@ GROUP_INPUTS = (
     ("Specular Light", "NodeSocketColor"),  # the engine's specular radiance (Eevee: Specular Light)
     ("Specular Color", "NodeSocketColor"),  # its weight (Eevee: Specular Color)
 )
-# Render Layers outputs that feed GROUP_INPUTS[1:], and the view layer flags
-# that make the engine write them. Eevee's Specular Light / Color passes are
-# its glossy ones in the API.
-ENGINE_PASSES = (("GlossDir", "Specular Light", "use_pass_glossy_direct"),
-                 ("GlossCol", "Specular Color", "use_pass_glossy_color"))
+# The passes that feed GROUP_INPUTS[1:] (host/nodes.PASS_OUTPUTS names their
+# Render Layers outputs in each Blender), and the view layer flags that make
+# the engine write them. Eevee's Specular Light / Color passes are its glossy
+# ones in the API.
+ENGINE_PASSES = (("glossy_direct", "Specular Light", "use_pass_glossy_direct"),
+                 ("glossy_color", "Specular Color", "use_pass_glossy_color"))
 GROUP_OUTPUTS = (
     ("Image", "NodeSocketColor"),  # composited (or the debug view)
     ("Reflection", "NodeSocketColor"),  # R: what Glint changes (rgb may be negative), alpha = vis
@@ -157,38 +158,44 @@ BLUR_LEVELS = tuple((float(lod), HALF_ENERGY_SIGMA * 2.0 ** lod) for lod in (2, 
 
 
 def _blur_node(sigma: float):
-    # Fast Gaussian's size is its sigma in pixels, an integer; the Size input
-    # scales it, which gives the exact sigma.
-    size = max(1, math.ceil(sigma))
-    return ("CompositorNodeBlur", {"filter_type": "FAST_GAUSS", "use_relative": False, "use_bokeh": False,
-                                   "use_gamma_correction": False, "use_extended_bounds": False,
-                                   "use_variable_size": False, "size_x": size, "size_y": size},
-            {1: sigma / size})
+    return ("blur", {"sigma": sigma}, {})
 
 
-def _mix(blend_type: str, defaults=None):
-    return ("CompositorNodeMixRGB", {"blend_type": blend_type, "use_alpha": False, "use_clamp": False},
-            defaults or {})
+def _mix(blend: str, defaults=None):
+    return ("mix", {"blend": blend}, defaults or {})
 
 
 def _translate():
-    return ("CompositorNodeTranslate", {"use_relative": False, "wrap_axis": "NONE"}, {})
+    return ("translate", {}, {})
 
 
-# Node description: name -> (bl_idname, properties, {input index: default value}).
-# Inputs are addressed by index: Math nodes have several inputs named "Value".
+def _separate():
+    return ("separate", {}, {})
+
+
+def _math(operation: str, clamp: bool, defaults):
+    return ("math", {"operation": operation, "clamp": clamp}, defaults)
+
+
+# Node description: name -> (kind, options, {input index: default value}).
+# Kinds are abstract (image, map_uv, separate, combine, translate, mix, math,
+# switch, blur): host/nodes.py lowers each onto the node type and options of
+# the running Blender. Inputs are numbered as the kind defines them, whatever
+# the host calls its sockets: mix (factor, a, b), math (a, b, c), switch (off,
+# on), translate (image, x, y), map_uv (image, uv), blur (image),
+# combine (r, g, b, a); separate's outputs are (r, g, b, a).
 GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
-    "uv_image": ("CompositorNodeImage", {"image": IMAGE_UV}, {}),
-    "weight_image": ("CompositorNodeImage", {"image": IMAGE_WEIGHT}, {}),
-    "debug_image": ("CompositorNodeImage", {"image": IMAGE_DEBUG}, {}),
-    "position_image": ("CompositorNodeImage", {"image": IMAGE_POSITION}, {}),
-    "normal_image": ("CompositorNodeImage", {"image": IMAGE_NORMAL}, {}),
-    "specular_image": ("CompositorNodeImage", {"image": IMAGE_SPECULAR}, {}),
+    "uv_image": ("image", {"image": IMAGE_UV}, {}),
+    "weight_image": ("image", {"image": IMAGE_WEIGHT}, {}),
+    "debug_image": ("image", {"image": IMAGE_DEBUG}, {}),
+    "position_image": ("image", {"image": IMAGE_POSITION}, {}),
+    "normal_image": ("image", {"image": IMAGE_NORMAL}, {}),
+    "specular_image": ("image", {"image": IMAGE_SPECULAR}, {}),
     # alpha = 0: no fading by uv derivatives, so Map UV only premultiplies by vis.
-    "map_uv": ("CompositorNodeMapUV", {"alpha": 0}, {}),
-    "sep_uv": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    "offset_image": ("CompositorNodeImage", {"image": IMAGE_OFFSET}, {}),
-    "sep_offset": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    "map_uv": ("map_uv", {}, {}),
+    "sep_uv": _separate(),
+    "offset_image": ("image", {"image": IMAGE_OFFSET}, {}),
+    "sep_offset": _separate(),
     # The region's results into the frame (see "The region" above). Whatever
     # meets a frame-sized input goes through one of these first.
     "world_to_frame": _translate(),
@@ -196,8 +203,8 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "uv_to_frame": _translate(),
     "bounce_to_frame": _translate(),
     "weight_to_frame": _translate(),
-    "sep_uv_frame": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    "sep_weight_frame": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
+    "sep_uv_frame": _separate(),
+    "sep_weight_frame": _separate(),
     # D on a frame-sized canvas, 0 x frame + 1 x D: what the second Map UV
     # samples (it scales uv by its image's size) and what the blur spreads.
     "bounce_source": _mix("MIX", {0: 1.0}),
@@ -208,32 +215,31 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     # 0 the light is inf or NaN and S NaN, which vis * S = 0 * NaN would carry
     # into the frame. max(x, 0) per channel (Blender's MAXIMUM returns its
     # second input when the first is NaN) makes S 0 there and nothing else.
-    "sep_specular": ("CompositorNodeSeparateColor", {"mode": "RGB"}, {}),
-    "finite_r": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
-    "finite_g": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
-    "finite_b": ("CompositorNodeMath", {"operation": "MAXIMUM", "use_clamp": False}, {1: 0.0}),
-    "finite_specular": ("CompositorNodeCombineColor", {"mode": "RGB"}, {3: 1.0}),
+    "sep_specular": _separate(),
+    "finite_r": _math("MAXIMUM", False, {1: 0.0}),
+    "finite_g": _math("MAXIMUM", False, {1: 0.0}),
+    "finite_b": _math("MAXIMUM", False, {1: 0.0}),
+    "finite_specular": ("combine", {}, {3: 1.0}),
     "delta": _mix("SUBTRACT"),                      # C * W - vis * S
     # Under a uniform world S = colour x W: D = W (C - vis colour), two nodes
     # where the passes' path takes eight (the compositor runs each on every pixel).
     "world_replaced": _mix("SUBTRACT"),             # C - vis * colour
     "world_delta": _mix("MULTIPLY", {0: 1.0}),      # W (C - vis * colour)
-    "use_passes": ("CompositorNodeSwitch", {"check": True}, {}),
-    "bounce_map_uv": ("CompositorNodeMapUV", {"alpha": 0}, {}),  # vis * D(u, v)
+    "use_passes": ("switch", {"on": True}, {}),
+    "bounce_map_uv": ("map_uv", {}, {}),  # vis * D(u, v)
     "bounce_weighted": _mix("MULTIPLY", {0: 1.0}),  # W * vis * D(u, v)
     "bounced": _mix("ADD", {0: 1.0}),               # D2 = D + W * vis * D(u, v)
-    "use_bounce": ("CompositorNodeSwitch", {"check": False}, {}),
-    "use_blur": ("CompositorNodeSwitch", {"check": True}, {}),
+    "use_bounce": ("switch", {"on": False}, {}),
+    "use_blur": ("switch", {"on": True}, {}),
     "combined": _mix("ADD", {0: 1.0}),              # frame + R
-    "show_reflection": ("CompositorNodeSwitch", {"check": False}, {}),
-    "show_debug": ("CompositorNodeSwitch", {"check": False}, {}),
+    "show_reflection": ("switch", {"on": False}, {}),
+    "show_debug": ("switch", {"on": False}, {}),
 }
 for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     _lo = BLUR_LEVELS[_j - 2][0] if _j > 1 else 0.0
     GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma)
     # s_j = clamp(lod / (lod_j - lod_{j-1}) - lod_{j-1} / (lod_j - lod_{j-1}), 0, 1)
-    GROUP_NODES[f"level_{_j}"] = ("CompositorNodeMath", {"operation": "MULTIPLY_ADD", "use_clamp": True},
-                                  {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
+    GROUP_NODES[f"level_{_j}"] = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
     GROUP_NODES[f"mix_{_j}"] = _mix("MIX")
 
 GROUP_IN = "__input__"
@@ -292,7 +298,7 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("weight_to_frame", 0, "sep_weight_frame", 0),
 ]
 # every Translate moves by the region's offset
-for _t in [n for n, (kind, _, _) in GROUP_NODES.items() if kind == "CompositorNodeTranslate"]:
+for _t in [n for n, (kind, _, _) in GROUP_NODES.items() if kind == "translate"]:
     GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
 for _j in range(1, len(BLUR_LEVELS) + 1):
     _below = "blur_source" if _j == 1 else f"mix_{_j - 1}"
@@ -474,7 +480,7 @@ def _blend(props, fac, c1, c2):
     fac = np.asarray(fac, dtype=np.float32)
     if fac.ndim == c1.ndim - 1:
         fac = fac[..., None]
-    mode = props["blend_type"]
+    mode = props["blend"]
     out = np.array(c1, dtype=np.float32, copy=True)
     if mode == "MIX":
         out[..., :3] = (1.0 - fac) * c1[..., :3] + fac * c2[..., :3]
@@ -485,7 +491,7 @@ def _blend(props, fac, c1, c2):
     elif mode == "SUBTRACT":
         out[..., :3] = c1[..., :3] - fac * c2[..., :3]
     else:
-        raise ValueError(f"blend_type {mode!r} is not modelled")
+        raise ValueError(f"blend {mode!r} is not modelled")
     return out.astype(np.float32)
 
 
@@ -575,37 +581,37 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
             value = group_in[index]
         else:
             kind, props, _ = GROUP_NODES[node]
-            if kind == "CompositorNodeSwitch":  # resolved before anything runs: the other side is never read
+            if kind == "switch":  # resolved before anything runs: the other side is never read
                 value = inp(node, 1 if switches[node] else 0)
                 cache[key] = value
                 return value
-            n_in = {"CompositorNodeMath": 3, "CompositorNodeMixRGB": 3, "CompositorNodeCombineColor": 4}.get(kind)
+            n_in = {"math": 3, "mix": 3, "combine": 4}.get(kind)
             hw = _canvas([inp(node, i) for i in range(n_in)], frame_hw) if n_in else None
-            if kind == "CompositorNodeImage":
+            if kind == "image":
                 value = np.asarray(images[props["image"]], dtype=np.float32)
                 if index == 1:
                     value = value[..., 3]
-            elif kind == "CompositorNodeTranslate":
+            elif kind == "translate":
                 dx, dy = (float(np.asarray(inp(node, i), np.float32).flat[0]) for i in (1, 2))
                 value = _translated(inp(node, 0), dx, dy, frame_hw)
-            elif kind == "CompositorNodeCombineColor":
+            elif kind == "combine":
                 value = np.stack([np.broadcast_to(np.asarray(inp(node, i), np.float32), hw)
                                   for i in range(4)], axis=-1)
-            elif kind == "CompositorNodeMapUV":
+            elif kind == "map_uv":
                 value = map_uv(inp(node, 0), inp(node, 1))
-            elif kind == "CompositorNodeBlur":
-                value = blur(inp(node, 0), props["size_x"] * inp(node, 1))
-            elif kind == "CompositorNodeSeparateColor":
+            elif kind == "blur":
+                value = blur(inp(node, 0), props["sigma"])
+            elif kind == "separate":
                 src = inp(node, 0)
                 value = _as_colour(src, tuple(_canvas([src], frame_hw)) + (4,))[..., index]
-            elif kind == "CompositorNodeMath":
+            elif kind == "math":
                 a, b, c = (np.asarray(inp(node, i) if inp(node, i) is not None else 0.0, np.float32)
                            for i in range(3))
                 value = _MATH[props["operation"]](a, b, c)
-                if props["use_clamp"]:
+                if props["clamp"]:
                     value = np.clip(value, 0.0, 1.0)
                 value = np.broadcast_to(value, hw).astype(np.float32)
-            elif kind == "CompositorNodeMixRGB":
+            elif kind == "mix":
                 fac = np.asarray(inp(node, 0), np.float32)
                 shape = tuple(hw) + (4,)
                 value = _blend(props, fac, _as_colour(inp(node, 1), shape), _as_colour(inp(node, 2), shape))

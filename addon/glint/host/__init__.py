@@ -1,0 +1,37 @@
+"""Everything that differs between the Blenders Glint runs on, in one place.
+
+* :mod:`.engines`: engine ids, Eevee Legacy or Next, Eevee's own reflections;
+* :mod:`.nodes`: where the compositor tree lives, which node types and
+  options it has, how sockets are addressed, the Render Layers' pass names,
+  the File Output node;
+* this module: which Blenders were tested, and what the running one is.
+
+Each difference is chosen by a feature test of the running Blender; the
+version number is read only to say, once, that a Blender was not tested.
+Nothing outside this package knows a Blender version.
+"""
+from __future__ import annotations
+
+from typing import Optional, Tuple
+
+import bpy
+
+# The Blenders the test suite runs on (scripts/hosts/hosts.conf, README's table).
+TESTED = ((3, 4), (4, 3), (5, 2))
+
+
+def version() -> Tuple[int, int, int]:
+    return tuple(bpy.app.version)
+
+
+def version_text() -> str:
+    return bpy.app.version_string
+
+
+def untested_note() -> Optional[str]:
+    """A sentence for the log when this Blender is not one the tests run on."""
+    if tuple(bpy.app.version[:2]) in TESTED:
+        return None
+    tested = ", ".join(f"{a}.{b}" for a, b in TESTED)
+    return (f"Blender {bpy.app.version_string} is not one Glint is tested on ({tested}); "
+            "it should work, and a frame it cannot handle renders without reflections")

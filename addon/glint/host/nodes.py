@@ -1,0 +1,341 @@
+"""The compositor as the running Blender spells it.
+
+``logic/compositing.py`` describes Glint's node group once, in abstract node
+kinds (``mix``, ``math``, ``switch``, ``blur``, ...) whose inputs are numbered
+the way the description links them. This module lowers that description onto
+the compositor this Blender has:
+
+* up to 4.5 the compositor is ``scene.node_tree`` behind ``scene.use_nodes``,
+  with compositor-only Mix RGB and Math nodes and options held as node
+  properties (Switch's ``check``, Blur's ``size_x`` and filter, Translate's
+  ``wrap_axis``); a Composite node receives the frame;
+* from 5.0 it is a node group of its own (``scene.compositing_node_group``)
+  whose Group Output receives the frame; Mix and Math are the shader nodes
+  (``ShaderNodeMix`` with named, type-dependent sockets), and options are
+  input sockets (Switch's ``Switch``, Blur's ``Size`` vector and ``Type``
+  menu, the Extension menus of Translate and Map UV); the Render Layers
+  node names its passes in words ("Glossy Direct", not "GlossDir").
+
+Every choice is a feature test (does this node type, socket or property
+exist), so a Blender between the tested ones takes whichever form it has.
+"""
+from __future__ import annotations
+
+import math
+from typing import Dict, Optional, Tuple
+
+import bpy
+
+
+def _has_type(idname: str) -> bool:
+    return hasattr(bpy.types, idname)
+
+
+def options_are_sockets() -> bool:
+    """5.0+: node options are input sockets and Mix/Math are the shader nodes."""
+    return not _has_type("CompositorNodeMixRGB")
+
+
+# ----------------------------------------------------------------------------
+# The scene's compositor tree
+
+
+def scene_tree(scene, create: bool = False):
+    """The scene's compositor node tree, or None; with ``create`` one is made
+    (3.4-4.5: Use Nodes on; 5.0+: a new compositing node group)."""
+    if hasattr(scene, "compositing_node_group"):
+        tree = scene.compositing_node_group
+        if tree is None and create:
+            tree = bpy.data.node_groups.new(f"{scene.name} Compositing", "CompositorNodeTree")
+            scene.compositing_node_group = tree
+            rl = tree.nodes.new("CompositorNodeRLayers")
+            rl.location = (-300, 0)
+            out = _ensure_group_output(tree)
+            tree.links.new(rl.outputs["Image"], out.inputs[0])
+        return tree
+    if create and (not scene.use_nodes or scene.node_tree is None):
+        scene.use_nodes = True
+    return scene.node_tree if scene.use_nodes else None
+
+
+def tree_switch_is_off(scene) -> bool:
+    """Whether the compositor is switched off at the tree level (3.4-4.5's Use
+    Nodes); 5.0+ has no such switch, the tree's presence is the switch."""
+    if hasattr(scene, "compositing_node_group"):
+        return scene.compositing_node_group is None
+    return not scene.use_nodes or scene.node_tree is None
+
+
+def release_tree(scene) -> None:
+    """Undo what :func:`scene_tree` turned on, for a tree Glint made on its own."""
+    if hasattr(scene, "compositing_node_group"):
+        tree = scene.compositing_node_group
+        scene.compositing_node_group = None
+        if tree is not None and tree.users == 0:
+            bpy.data.node_groups.remove(tree)
+    else:
+        scene.use_nodes = False
+
+
+def _ensure_group_output(tree):
+    out = next((n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"), None)
+    if out is None:
+        out = tree.nodes.new("NodeGroupOutput")
+        out.location = (600, 0)
+    if not any(name == "Image" for name, _ in group_sockets(tree)[1]):
+        new_group_socket(tree, "Image", "NodeSocketColor", "OUTPUT")
+    return out
+
+
+def frame_outputs(tree):
+    """The sockets that take the composited frame: every Composite node's
+    Image (3.4-4.5), or the Group Output's first input (5.0+)."""
+    if _has_type("CompositorNodeComposite"):
+        return [n.inputs["Image"] for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"]
+    return [n.inputs[0] for n in tree.nodes if n.bl_idname == "NodeGroupOutput" and len(n.inputs) > 1]
+
+
+def add_frame_output(tree, location):
+    """A node that takes the composited frame; returns its input socket."""
+    if _has_type("CompositorNodeComposite"):
+        comp = tree.nodes.new("CompositorNodeComposite")
+        comp.location = location
+        return comp.inputs["Image"]
+    return _ensure_group_output(tree).inputs[0]
+
+
+def default_tree_kinds() -> Tuple[Tuple[str, ...], ...]:
+    """The node kinds of a compositor tree as Blender makes it, untouched."""
+    if _has_type("CompositorNodeComposite"):
+        return (("CompositorNodeComposite", "CompositorNodeRLayers"),
+                ("CompositorNodeComposite", "CompositorNodeRLayers", "CompositorNodeViewer"))
+    return (("CompositorNodeRLayers", "NodeGroupOutput"),
+            ("CompositorNodeRLayers", "CompositorNodeViewer", "NodeGroupOutput"))
+
+
+# Render Layers outputs by pass: 3.4-4.5 short names, 5.0+ words.
+PASS_OUTPUTS = {"glossy_direct": ("GlossDir", "Glossy Direct"),
+                "glossy_color": ("GlossCol", "Glossy Color")}
+
+
+def pass_output(render_layers, pass_key: str):
+    """The Render Layers output of a pass, or None when the engine does not write it."""
+    for name in PASS_OUTPUTS[pass_key]:
+        sock = render_layers.outputs.get(name)
+        if sock is not None and getattr(sock, "enabled", True):
+            return sock
+    return None
+
+
+# ----------------------------------------------------------------------------
+# Node group interface (4.0 replaced inputs/outputs by ``interface``)
+
+
+def new_group_socket(tree, name: str, socket_type: str, in_out: str):
+    if hasattr(tree, "interface"):
+        return tree.interface.new_socket(name, in_out=in_out, socket_type=socket_type)
+    sockets = tree.inputs if in_out == "INPUT" else tree.outputs
+    return sockets.new(socket_type, name)
+
+
+def group_sockets(tree):
+    """([(name, socket type)] of the inputs, of the outputs) of a node group."""
+    if hasattr(tree, "interface"):
+        items = [i for i in tree.interface.items_tree if i.item_type == "SOCKET"]
+        return ([(i.name, i.socket_type) for i in items if i.in_out == "INPUT"],
+                [(i.name, i.socket_type) for i in items if i.in_out == "OUTPUT"])
+    return ([(i.name, i.bl_socket_idname) for i in tree.inputs],
+            [(o.name, o.bl_socket_idname) for o in tree.outputs])
+
+
+def clear_group_sockets(tree) -> None:
+    if hasattr(tree, "interface"):
+        tree.interface.clear()
+    else:
+        tree.inputs.clear()
+        tree.outputs.clear()
+
+
+# ----------------------------------------------------------------------------
+# Node kinds
+
+
+def _blur_size(sigma: float) -> int:
+    # 3.4-4.5's Fast Gaussian takes an integer size (its sigma in pixels) that
+    # the Size input scales, which together give the exact sigma.
+    return max(1, math.ceil(sigma))
+
+
+# kind -> (idname up to 4.5, idname from 5.0)
+_IDNAMES = {
+    "image": ("CompositorNodeImage", "CompositorNodeImage"),
+    "map_uv": ("CompositorNodeMapUV", "CompositorNodeMapUV"),
+    "separate": ("CompositorNodeSeparateColor", "CompositorNodeSeparateColor"),
+    "combine": ("CompositorNodeCombineColor", "CompositorNodeCombineColor"),
+    "translate": ("CompositorNodeTranslate", "CompositorNodeTranslate"),
+    "mix": ("CompositorNodeMixRGB", "ShaderNodeMix"),
+    "math": ("CompositorNodeMath", "ShaderNodeMath"),
+    "switch": ("CompositorNodeSwitch", "CompositorNodeSwitch"),
+    "blur": ("CompositorNodeBlur", "CompositorNodeBlur"),
+    "rgb": ("CompositorNodeRGB", "CompositorNodeRGB"),
+}
+
+# Sockets whose index moved: kind -> {abstract index: socket identifier}, 5.0+.
+_SOCKET_INPUTS = {
+    "mix": {0: "Factor_Float", 1: "A_Color", 2: "B_Color"},
+    "switch": {0: "Off", 1: "On"},
+}
+_SOCKET_OUTPUTS = {"mix": {0: "Result_Color"}}
+
+
+def idname(kind: str) -> str:
+    return _IDNAMES[kind][1 if options_are_sockets() else 0]
+
+
+def kind_of(node) -> Optional[str]:
+    """The abstract kind of a node Glint made, from its type."""
+    sockets = options_are_sockets()
+    return next((k for k, ids in _IDNAMES.items() if ids[1 if sockets else 0] == node.bl_idname), None)
+
+
+def _set_menu(node, socket: str, value: str) -> None:
+    sock = node.inputs.get(socket)
+    if sock is not None:
+        sock.default_value = value
+
+
+def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
+    """A node of ``kind`` with the description's ``props`` applied."""
+    sockets = options_are_sockets()
+    node = tree.nodes.new(idname(kind))
+    if kind == "image":
+        node.image = image_of(props["image"])
+    elif kind in ("separate", "combine"):
+        node.mode = "RGB"
+    elif kind == "mix":
+        if sockets:
+            node.data_type = "RGBA"
+            node.clamp_factor = False
+            node.clamp_result = False
+        else:
+            node.use_alpha = False
+            node.use_clamp = False
+        node.blend_type = props["blend"]
+    elif kind == "math":
+        node.operation = props["operation"]
+        node.use_clamp = bool(props.get("clamp", False))
+    elif kind == "switch":
+        set_switch(node, bool(props.get("on", False)))
+    elif kind == "blur":
+        sigma = float(props["sigma"])
+        if sockets:
+            _set_menu(node, "Type", "Fast Gaussian")
+            node.inputs["Size"].default_value = (sigma, sigma)
+            for name in ("Extend Bounds",):
+                if name in node.inputs:
+                    node.inputs[name].default_value = False
+        else:
+            size = _blur_size(sigma)
+            for key, value in (("filter_type", "FAST_GAUSS"), ("use_relative", False), ("use_bokeh", False),
+                               ("use_gamma_correction", False), ("use_extended_bounds", False),
+                               ("use_variable_size", False), ("size_x", size), ("size_y", size)):
+                setattr(node, key, value)
+            node.inputs[1].default_value = sigma / size
+    elif kind == "translate":
+        if sockets:
+            for name in ("Extension X", "Extension Y"):
+                _set_menu(node, name, "Clip")
+        else:
+            node.use_relative = False
+            node.wrap_axis = "NONE"
+    elif kind == "map_uv":
+        if not sockets:
+            node.alpha = 0  # no fading by uv derivatives: Map UV only premultiplies by vis
+    return node
+
+
+def _by_identifier(sockets, identifier: str):
+    # Collections are keyed by name; the Mix node has three sockets named "A".
+    return next(s for s in sockets if s.identifier == identifier)
+
+
+def input_socket(node, kind: str, index: int):
+    if options_are_sockets() and kind in _SOCKET_INPUTS:
+        return _by_identifier(node.inputs, _SOCKET_INPUTS[kind][index])
+    if options_are_sockets() and kind == "switch":
+        return node.inputs[index + 1]
+    return node.inputs[index]
+
+
+def output_socket(node, kind: str, index: int):
+    if options_are_sockets() and kind in _SOCKET_OUTPUTS:
+        return _by_identifier(node.outputs, _SOCKET_OUTPUTS[kind][index])
+    return node.outputs[index]
+
+
+def switch_is_on(node) -> bool:
+    if "Switch" in node.inputs:
+        return bool(node.inputs["Switch"].default_value)
+    return bool(node.check)
+
+
+def set_switch(node, on: bool) -> None:
+    """Set a Switch when it differs (each write is an RNA update)."""
+    if switch_is_on(node) == on:
+        return
+    if "Switch" in node.inputs:
+        node.inputs["Switch"].default_value = on
+    else:
+        node.check = on
+
+
+def rgb_value(node):
+    return tuple(node.outputs[0].default_value)
+
+
+def set_rgb_value(node, value) -> None:
+    if rgb_value(node) != tuple(value):
+        node.outputs[0].default_value = value
+
+
+# ----------------------------------------------------------------------------
+# The layers EXR (File Output): 5.0 renamed its folder and slots
+
+
+def new_exr_output(tree, slots, location):
+    node = tree.nodes.new("CompositorNodeOutputFile")
+    node.location = location
+    fmt = node.format
+    if hasattr(fmt, "media_type"):
+        fmt.media_type = "MULTI_LAYER_IMAGE"
+    fmt.file_format = "OPEN_EXR_MULTILAYER"
+    fmt.color_depth = "32"
+    fmt.exr_codec = "ZIP"
+    if hasattr(node, "file_output_items"):
+        node.file_output_items.clear()
+        for slot in slots:
+            node.file_output_items.new("RGBA", slot)
+    else:
+        node.layer_slots.clear()
+        for slot in slots:
+            node.layer_slots.new(slot)
+    return node
+
+
+def exr_input(node, slot: str):
+    return node.inputs[slot]
+
+
+def exr_path(node) -> str:
+    return node.directory + node.file_name if hasattr(node, "directory") else node.base_path
+
+
+def set_exr_path(node, path: str) -> None:
+    if exr_path(node) == path:
+        return
+    if hasattr(node, "directory"):
+        # 5.0 splits the old base path into a folder and a file name prefix.
+        folder, _, name = path.rpartition("/")
+        node.directory, node.file_name = folder + "/" if folder else "//", name
+    else:
+        node.base_path = path
