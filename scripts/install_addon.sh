@@ -1,15 +1,42 @@
 #!/usr/bin/env bash
 # One-line install of the add-on from this checkout:
-#   scripts/install_addon.sh
-# Symlinks addon/glint into Blender's user add-on folder (so edits in the
-# checkout are live) and enables it in the saved preferences. The native module
-# is then found in <checkout>/build/python (or $GLINT_CORE_PATH).
+#   scripts/install_addon.sh            link the checkout (edits are live)
+#   scripts/install_addon.sh --package  install the package this Blender takes
+# The default symlinks addon/glint into Blender's user add-on folder, which
+# every Blender from 3.4 to 5.x loads (4.2+ lists it as a legacy add-on), and
+# enables it in the saved preferences; the native module is then found in
+# <checkout>/build/python (or $GLINT_CORE_PATH).
+# --package builds what scripts/build_addon_zip.sh makes for this Blender and
+# installs it the way that Blender installs add-ons: an extension on 4.2 and
+# later (`blender --command extension install-file`), the add-on zip before.
 #   BLENDER               Blender to use (default: blender)
 #   BLENDER_USER_SCRIPTS  user scripts folder (default: ~/.config/blender/<version>/scripts)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 blender=${BLENDER:-blender}
 command -v "$blender" >/dev/null || { echo "install_addon: $blender not found" >&2; exit 1; }
+
+if [[ ${1:-} == --package ]]; then
+  pkg=$(mktemp -d)/glint.zip
+  BLENDER=$blender bash "$root/scripts/build_addon_zip.sh" "${GLINT_BUILD_DIR:-$root/build}" "$pkg"
+  if "$blender" --command extension install-file --help >/dev/null 2>&1; then
+    "$blender" --command extension install-file -r user_default -e "$pkg"
+    echo "install_addon: installed and enabled the extension"
+  else
+    "$blender" -b --python-expr "
+import bpy, sys
+bpy.ops.preferences.addon_install(filepath='$pkg', overwrite=True)
+bpy.ops.preferences.addon_enable(module='glint')
+if 'glint' not in bpy.context.preferences.addons:
+    sys.exit('install_addon: enabling the add-on failed')
+bpy.context.preferences.is_dirty = True
+bpy.ops.wm.save_userpref()
+print('install_addon: installed the add-on zip and enabled it')
+" 2>&1 | grep -E '^install_addon|Error|rror:' || true
+  fi
+  exit 0
+fi
+[[ $# -eq 0 ]] || { echo "install_addon: usage: install_addon.sh [--package]" >&2; exit 1; }
 
 version=$("$blender" --version 2>/dev/null | sed -n 's/^Blender \([0-9]*\.[0-9]*\).*/\1/p' | head -n1)
 [[ -n $version ]] || { echo "install_addon: cannot tell the Blender version" >&2; exit 1; }

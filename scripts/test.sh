@@ -38,4 +38,14 @@ for d in tests/python tests/addon tests/blender; do
 done
 /usr/bin/python3 -m pytest -q -p no:cacheprovider "${suites[@]}" || status=1
 
+# The newer Blenders (scripts/hosts/hosts.conf: Debian 13's 4.3, sid's 5.2),
+# each in a chroot of its own, cached outside the checkout. GLINT_HOSTS picks
+# which ("trixie", "trixie sid", "none"); GLINT_HOST_TESTS which suites.
+hosts=${GLINT_HOSTS:-$(bash "$root/scripts/hosts/host.sh" list | tr '\n' ' ')}
+for h in $hosts; do
+  [[ $h == none ]] && continue
+  echo "== pytest on host $h"
+  bash "$root/scripts/hosts/test_host.sh" "$h" || status=1
+done
+
 exit $status

@@ -3,20 +3,36 @@ install from a checkout, and an add-on without its native module."""
 import os
 import shutil
 import subprocess
+import zipfile
 
 import numpy as np
 import pytest
 
-from glint_blender_helpers import BUILD, PANELS, ROOT, Blender, read_exr
+from glint_blender_helpers import BLENDER as BLENDER_EXE, BUILD, PANELS, ROOT, Blender, read_exr
 
 pytestmark = pytest.mark.blender
 
 
-def test_zip_installs_from_preferences_and_renders_reflections(session_dir, samples, tmp_path):
+def test_package_installs_the_way_this_blender_installs_and_renders_reflections(session_dir, samples, tmp_path):
+    """The package build_addon_zip.sh makes for this Blender: an extension on
+    4.2 and later (installed with Blender's own ``extension install-file``), the
+    legacy add-on zip before (Preferences > Add-ons > Install)."""
     zip_path = str(tmp_path / "glint.zip")
     subprocess.run(["bash", os.path.join(ROOT, "scripts", "build_addon_zip.sh"), BUILD, zip_path], check=True)
+    with zipfile.ZipFile(zip_path) as z:
+        names = z.namelist()
+    extension = "blender_manifest.toml" in names
     b = Blender(str(tmp_path / "home"), core_path=False, link_addon=False)
-    log = b.run(["--python-expr", f"""
+    b.env["BLENDER_USER_EXTENSIONS"] = os.path.join(b.root, "extensions")
+    if extension:
+        assert any(n.startswith("native/glint_core") for n in names), names
+        proc = subprocess.run([BLENDER_EXE, "--command", "extension", "install-file", "-r", "user_default", "-e",
+                               zip_path], env=b.env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                              timeout=300)
+        assert proc.returncode == 0, proc.stdout
+        installed = os.path.join(b.root, "extensions", "user_default", "glint")
+    else:
+        log = b.run(["--python-expr", f"""
 import bpy
 bpy.ops.preferences.addon_install(filepath={zip_path!r})
 bpy.ops.preferences.addon_enable(module='glint')
@@ -24,11 +40,11 @@ bpy.context.preferences.is_dirty = True
 bpy.ops.wm.save_userpref()
 print('ENABLED', 'glint' in bpy.context.preferences.addons)
 """], factory=False)
-    assert "ENABLED True" in log
-    installed = os.path.join(b.scripts, "addons", "glint")
-    assert os.path.isdir(os.path.join(installed, "native")) and not os.path.islink(installed)
+        assert "ENABLED True" in log
+        installed = os.path.join(b.scripts, "addons", "glint")
+    assert os.path.isdir(os.path.join(installed, "native")) and not os.path.islink(installed), installed
     # No GLINT_CORE_PATH, no --addons: the saved preferences load the add-on and
-    # the module comes from the zip's native/ folder.
+    # the module comes from the package's native/ folder.
     log = b.render(samples["mirror_floor"], str(tmp_path / "out"), {"glint": {"backend": "CPU"}},
                    addons=False, factory=False)
     assert "Glint: frame 1: reflections composited" in log, log[-3000:]

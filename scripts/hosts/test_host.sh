@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Build the core and run the tests inside one host chroot (scripts/hosts/host.sh),
+# against that Debian's Blender, Python, numpy, Embree and OpenEXR.
+#   scripts/hosts/test_host.sh NAME [pytest paths...]
+# Default paths: $GLINT_HOST_TESTS, else the add-on and Blender suites. The
+# build goes to build/host-NAME in the checkout (kept between runs).
+set -uo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+name=${1:?usage: test_host.sh NAME [pytest paths...]}
+shift
+paths=("$@")
+if ((${#paths[@]} == 0)); then read -r -a paths <<<"${GLINT_HOST_TESTS:-tests/addon tests/blender}"; fi
+
+bash "$here/host.sh" make "$name" >/dev/null || exit 1
+bash "$here/host.sh" run "$name" bash -c '
+  set -o pipefail
+  build=/glint/build/host-$GLINT_HOST
+  echo "== $GLINT_HOST: $(cat /.glint-blender-version 2>/dev/null), $(python3 --version)"
+  cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DGLINT_BUILD_TESTS=OFF \
+    -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_TOOLS=OFF >"$build.configure.log" 2>&1 ||
+    { cat "$build.configure.log"; echo "== $GLINT_HOST: configure failed"; exit 1; }
+  cmake --build "$build" -j"$(nproc)" >"$build.build.log" 2>&1 ||
+    { tail -40 "$build.build.log"; echo "== $GLINT_HOST: build failed"; exit 1; }
+  GLINT_BUILD_DIR=$build python3 -m pytest -q -p no:cacheprovider "$@"
+' test_host "${paths[@]}"
