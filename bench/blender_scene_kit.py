@@ -42,6 +42,19 @@ def register_addon(parent):
     return glint
 
 
+def use_eevee(scene, own_reflections=False):
+    """Render ``scene`` with this Blender's Eevee (Legacy or Next, host layer),
+    with or without Eevee's own reflections (SSR or ray tracing)."""
+    from glint.host import engines
+    scene.render.engine = engines.eevee_id()
+    engines.set_eevee_traces_reflections_for_comparison(scene, own_reflections)
+
+
+def eevee_reflections_name(scene):
+    from glint.host import engines
+    return engines.eevee_reflections_name(scene)
+
+
 def principled(name, colour, roughness=0.5, specular=0.5, metallic=0.0):
     """A Principled material; Specular 0 on a dielectric means "not reflective" to Glint.
     The viewport's colour, metallic and roughness follow (Workbench's material colour)."""

@@ -5,8 +5,9 @@ few coloured objects (a few thousand triangles), then renders the same frame, in
 Blender process, alternating per round:
 
   plain   Eevee, Screen Space Reflections off, Glint off
-  ssr     Eevee with its SSR on (half-resolution trace off), Glint off
-  glint   Eevee, SSR off, Glint on (the preset given, backend Auto)
+  ssr     Eevee with its own reflections on, Glint off: Legacy's SSR (half-resolution
+          trace off) on Blender 3.x, Eevee Next's ray tracing at its defaults on 4.2+
+  glint   Eevee, its own reflections off, Glint on (the preset given, backend Auto)
 
 and prints the median of each: Blender's wall time for the render, what SSR and Glint
 add to it (against plain), Glint's stages from its log (export/gather, rasterize,
@@ -58,12 +59,11 @@ def build_scene(size, samples):
     for ob in list(scene.objects):
         bpy.data.objects.remove(ob)
     r = scene.render
-    r.engine = "BLENDER_EEVEE"
+    kit.use_eevee(scene)
     r.resolution_x, r.resolution_y = size
     r.resolution_percentage = 100
     r.filepath = "/tmp/glint_frame_bench_"
     scene.eevee.taa_render_samples = samples
-    scene.eevee.use_ssr_halfres = False
     world = scene.world or bpy.data.worlds.new("World")
     scene.world = world
     world.use_nodes = True
@@ -100,7 +100,7 @@ def build_scene(size, samples):
 
 
 def configure(scene, mode, opts):
-    scene.eevee.use_ssr = mode == "ssr"
+    kit.use_eevee(scene, own_reflections=mode == "ssr")
     g = scene.glint
     if mode == "glint":
         g.preset = opts["preset"]
@@ -157,11 +157,12 @@ def main():
     clear = statistics.median(clear_ms)
     added = med["glint"] - med["plain"]
     w, h = opts["size"]
-    print(f"\nframe_bench: {w}x{h} Eevee, {opts['samples']} samples, {tris} triangles, "
+    print(f"\nframe_bench: Blender {bpy.app.version_string}, {w}x{h} Eevee, {opts['samples']} samples, {tris} triangles, "
           f"preset {opts['preset']}, backend {opts['backend']} -> {'/'.join(sorted(backends))}, "
           f"medians of {opts['rounds']} rounds")
     print(f"  render, plain             {med['plain']:8.0f} ms")
-    print(f"  Eevee SSR adds            {med['ssr'] - med['plain']:8.0f} ms")
+    own = "Eevee " + kit.eevee_reflections_name(scene)
+    print(f"  {own + ' adds':<26}{med['ssr'] - med['plain']:8.0f} ms")
     print(f"  Glint adds                {added:8.0f} ms")
     for name in ("export", "rasterize", "trace", "images"):
         print(f"    {name:<22}{st.get(name, 0.0):8.1f} ms")

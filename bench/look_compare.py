@@ -8,7 +8,9 @@ isolates the reflections of the objects three ways:
           invisible to glossy rays (``visible_glossy = False``), which reflects the sky
           alone as Eevee's world probe does; same seed, so every path that never meets
           a reflected mesh is the same in both and cancels
-  ssr     Eevee with Screen Space Reflections on minus Eevee with it off
+  ssr     Eevee with its own reflections on minus Eevee with them off: Legacy's Screen
+          Space Reflections on Blender 3.x, Eevee Next's ray tracing (at its defaults)
+          on 4.2 and later
   glint   Eevee with Glint on (default preset, backend CPU) minus Eevee with it off
           (SSR off in both)
 
@@ -219,12 +221,11 @@ def build_scene(name, opts):
     vs.view_transform, vs.look, vs.exposure, vs.gamma = "Standard", "None", 0.0, 1.0
     scene.display_settings.display_device = "sRGB"
     scene.eevee.taa_render_samples = opts["eevee-samples"]
-    scene.eevee.use_ssr_halfres = False
     # Eevee lights with the world unoccluded unless its ambient occlusion is on: the
     # corridor's walls then came out 30% brighter than Cycles' (docs/look.md), and every
     # reflection of them with it. On, at the rooms' scale, for Eevee, SSR and Glint alike.
-    scene.eevee.use_gtao = True
-    scene.eevee.gtao_distance = 3.0
+    from glint.host import engines
+    engines.set_eevee_ambient_occlusion(scene, 3.0)
     c = scene.cycles
     c.device = "CPU"
     c.samples = max(1, opts["cycles-samples"] // 2)  # two seeds, averaged
@@ -284,8 +285,7 @@ def cycles_pair(scene, meshes, seed, tmp):
 def eevee(scene, mode, tmp, state, stages):
     """Renders with Eevee plain, with its SSR or with Glint; Glint's stage timings
     go into ``stages``."""
-    scene.render.engine = "BLENDER_EEVEE"
-    scene.eevee.use_ssr = mode == "ssr"
+    kit.use_eevee(scene, own_reflections=mode == "ssr")
     g = scene.glint
     if mode == "glint":
         g.backend = "CPU"
@@ -472,7 +472,8 @@ def main():
             infos[name] = info
             print(f"look_compare: {name} done in {info['total_s']:.0f} s", flush=True)
     w, h = opts["size"]
-    print(f"\nlook_compare: {w}x{h}, Cycles {opts['cycles-samples']} samples (2 seeds x "
+    print(f"\nlook_compare: Blender {bpy.app.version_string} (method ssr = Eevee's "
+          f"{kit.eevee_reflections_name(bpy.context.scene)}), {w}x{h}, Cycles {opts['cycles-samples']} samples (2 seeds x "
           f"{opts['cycles-samples'] // 2}), Eevee {opts['eevee-samples']} samples, threshold "
           f"{opts['threshold']}, time added: median of {opts['rounds']} rounds, add-on {opts['addon']}\n")
     print("| scene | method | strength | error | max change elsewhere | time added ms |")

@@ -24,7 +24,7 @@ if "bpy" in locals():
 
     for _name in ("logic.materials", "logic.projection", "logic.frustum", "logic.settings",
                   "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement",
-                  "logic.compositing", "host", "host.engines", "host.nodes", "native", "state",
+                  "logic.compositing", "host", "host.engines", "host.nodes", "host.data", "native", "state",
                   "gather", "compositor", "frame", "measure", "properties", "preferences", "operators",
                   "ui", "handlers"):
         importlib.reload(importlib.import_module(f"{__name__}.{_name}"))

@@ -16,7 +16,7 @@ import bpy
 import numpy as np
 
 from . import gather
-from .host import engines, nodes as host_nodes
+from .host import data as host_data, engines, nodes as host_nodes
 from .logic import compositing as cg
 from .logic import world as world_logic
 from .state import STATE
@@ -367,7 +367,7 @@ def describe_world(world) -> Optional[dict]:
     """The plain description of a world that :func:`world_logic.specular_source` reads."""
     if world is None:
         return None
-    if not world.use_nodes or world.node_tree is None:
+    if not host_data.uses_nodes(world):
         return {"use_nodes": False, "color": tuple(world.color)}
     outputs = [n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"]
     # Eevee renders the active output (is_active_output), targets ALL or EEVEE.
@@ -455,11 +455,8 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
             if tree.nodes.get(name) is not None:
                 change("the world colour nodes are no longer wanted")
                 tree.nodes.remove(tree.nodes[name])
-        for pass_key, group_input, _ in cg.ENGINE_PASSES:
-            output = host_nodes.pass_output(rl, pass_key)
-            if output is not None:
-                _link_once(tree, output, gnode.inputs[group_input], change,
-                           f"the engine's {group_input} pass is not linked to the Glint node")
+        # The passes first: a Blender may list a Render Layers output only once
+        # its pass is on (values, which the render thread may write).
         if eevee:
             off = [flag for _, _, flag in cg.ENGINE_PASSES if not getattr(view_layer, flag)]
             if off:
@@ -467,6 +464,11 @@ def _ensure_engine_passes(scene, tree, rl, gnode, view_layer, change, turned_on)
                     setattr(view_layer, flag, True)
                 scene.glint.owns_specular_passes = True
                 turned_on.append("Eevee's Specular Light and Specular Color passes (what a reflection replaces)")
+        for pass_key, group_input, _ in cg.ENGINE_PASSES:
+            output = host_nodes.pass_output(rl, pass_key)
+            if output is not None:
+                _link_once(tree, output, gnode.inputs[group_input], change,
+                           f"the engine's {group_input} pass is not linked to the Glint node")
     if eevee:
         STATE.specular_source = source
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import compositor, gather, native
+from .host import nodes as host_nodes
 from .logic import compositing, geometry, reduced, settings as settings_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
@@ -179,8 +180,9 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         with timings.measure("images"):
             view = values["debug_view"]
             # The group composites only the region that can change; a debug
-            # view or the layers EXR shows the uv and vis of the whole frame.
-            if view != "NONE" or values["write_layers_exr"]:
+            # view or the layers EXR shows the uv and vis of the whole frame,
+            # and so does a compositor that cannot place a region (host/nodes).
+            if view != "NONE" or values["write_layers_exr"] or not host_nodes.compositor_places_regions():
                 region = (0, 0, cam.width, cam.height)
             else:
                 region = compositing.image_region(uv[..., 2], weight[..., 3])

@@ -2,8 +2,10 @@
 
 Each function reads what Glint needs from an *evaluated* depsgraph (the one the
 render hands to ``frame_change_post``) and returns numpy arrays or plain dicts
-for the logic modules. The few API differences between Blender 3.4 and 4.x are
-confined to :func:`corner_normals` and :func:`principled_inputs`.
+for the logic modules. Where Blenders differ in how the data is reached, the
+host layer (``host/data.py``) reads it; the Principled BSDF's input names of
+3.x and 4.x both pass through :func:`principled_inputs` as data, and
+``logic/materials.principled_specular`` tells them apart by name.
 """
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .host import data as host_data
 from .logic import frustum, geometry, materials, projection
 
 GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
@@ -184,7 +187,7 @@ def material_info(mat) -> Tuple[materials.SpecularSpec, Optional[NormalMapRef]]:
             hardness = float(hardness)
         except (TypeError, ValueError):
             hardness = None
-    if not mat.use_nodes or mat.node_tree is None:
+    if not host_data.uses_nodes(mat):
         return materials.material_spec(_viewport(mat), hardness), None
     node, has_output = _surface_node(mat)
     if not has_output:
@@ -250,18 +253,6 @@ def normal_map_pixels(ref: NormalMapRef) -> np.ndarray:
 # Meshes
 
 
-def corner_normals(mesh) -> np.ndarray:
-    """One normal per face corner. Blender 4.1+ has ``Mesh.corner_normals``;
-    3.4 computes them into the loops with ``calc_normals_split``."""
-    n = np.empty(len(mesh.loops) * 3, dtype=np.float32)
-    if hasattr(mesh, "corner_normals"):
-        mesh.corner_normals.foreach_get("vector", n)
-    else:
-        mesh.calc_normals_split()
-        mesh.loops.foreach_get("normal", n)
-    return n.reshape(-1, 3)
-
-
 def mesh_arrays(mesh, uv_map: Optional[str] = None) -> geometry.MeshArrays:
     """Triangles, corner normals and (when ``uv_map`` is given) UVs and tangents."""
     mesh.calc_loop_triangles()
@@ -275,7 +266,7 @@ def mesh_arrays(mesh, uv_map: Optional[str] = None) -> geometry.MeshArrays:
     co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
     mesh.vertices.foreach_get("co", co)
     arrays = geometry.MeshArrays(co.reshape(-1, 3), tri_verts.reshape(-1, 3), tri_loops.reshape(-1, 3),
-                                 tri_mat, corner_normals(mesh))
+                                 tri_mat, host_data.corner_normals(mesh))
     if uv_map is not None and len(mesh.uv_layers):
         layer = mesh.uv_layers.get(uv_map) if uv_map else None
         layer = layer or mesh.uv_layers.active or mesh.uv_layers[0]

@@ -34,6 +34,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import compositor, frame, host, native
+from .host import engines
 from .state import STATE, FrameReport, log
 
 _job = {"scene": None, "target": None, "done": False, "skip": None, "ui_notice": None}
@@ -102,6 +103,9 @@ def on_render_init(scene, *args):
         log(f"scene {scene.name!r}: {turned_on}")
     if STATE.specular_source:
         log(f"the specular a reflection replaces comes from the {STATE.specular_source}")
+    own = engines.own_reflections_note(scene)
+    if own:
+        log(own)
 
 
 def _region_text(report) -> str:

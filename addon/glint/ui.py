@@ -4,6 +4,7 @@ from __future__ import annotations
 import bpy
 
 from . import compositor, native
+from .host import engines
 from .logic import measurement
 from .state import STATE
 
@@ -42,6 +43,9 @@ class GLINT_PT_render(bpy.types.Panel):
                 layout.label(text=f"{notice} for its reflections", icon="INFO")
             if STATE.specular_source:
                 layout.label(text=f"Replaced specular from the {STATE.specular_source}", icon="WORLD")
+            own = engines.own_reflections_note(context.scene)
+            if own:
+                layout.label(text=own, icon="INFO")
             if not context.scene.render.use_compositing:
                 layout.label(text="Compositing is off: Glint turns it on when rendering", icon="INFO")
         last = STATE.last

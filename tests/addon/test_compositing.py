@@ -325,9 +325,15 @@ def test_image_region_is_the_box_of_hits_and_blurred_pixels_grown_by_the_pad():
     vis[5, 7] = 0.5
     vis[9, 12] = 1.0
     p = cg.REGION_PAD
-    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 13 + p, 10 + p)
+    # rows 5-p..10+p are 9 + 2p, odd in a frame 20 high: one more row, so
+    # that the region centred on the frame sits on whole pixels
+    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 13 + p, 10 + p + 1)
     lod[15, 20] = 0.25  # a rough pixel takes blurred D from hits around it
-    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 21 + p, 16 + p)
+    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 21 + p, 16 + p + 1)
+    lod[15, 20] = 0.0
+    vis[19, 29] = 1.0  # at the frame's far corner an odd count grows towards the origin
+    assert cg.image_region(vis, lod) == (7 - p - 1, 5 - p - 1, 30, 20)
+    vis[19, 29] = 0.0
     vis[0, 0] = lod[19, 29] = 1.0  # the pad stops at the frame
     assert cg.image_region(vis, lod) == (0, 0, 30, 20)
 
@@ -371,7 +377,8 @@ def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur):
     base, position, spec, uv, seen, weight, lod, light, colour = confined_scene(seed=7)
     full = images_of(base, position, spec, uv, weight, lod)
     region = cg.image_region(uv[..., 2], lod)
-    assert region == (9 - cg.REGION_PAD, 6 - cg.REGION_PAD, 23 + cg.REGION_PAD, 15 + cg.REGION_PAD)
+    # rows 6..14 grown by the pad are 13, odd in a frame 24 high: one row more
+    assert region == (9 - cg.REGION_PAD, 6 - cg.REGION_PAD, 23 + cg.REGION_PAD, 15 + cg.REGION_PAD + 1)
     cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region))
     if world:  # the world path's inputs: a colour (an RGB node, no size) and the weight image
         kw = dict(specular_light=np.array((0.3, 0.35, 0.45, 1.0), np.float32), world_specular=True)

@@ -204,6 +204,8 @@ def principled(name, **inputs):
     m = bpy.data.materials.new(name); m.use_nodes = True
     p = m.node_tree.nodes['Principled BSDF']
     for k, v in inputs.items():
+        if k == 'Specular' and k not in p.inputs:  # 4.0+: the same F0 through Specular IOR Level
+            k = 'Specular IOR Level'
         p.inputs[k].default_value = v
     return m
 out['default'] = principled('Default')
@@ -221,8 +223,11 @@ mix.inputs['Fac'].default_value = 0.25
 nt.links.new(df.outputs[0], mix.inputs[1]); nt.links.new(gl.outputs[0], mix.inputs[2])
 nt.links.new(mix.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
 out['mix'] = d
-v = bpy.data.materials.new('Viewport'); v.use_nodes = False; v.metallic = 1.0; v.roughness = 0.0
-v.diffuse_color = (0.2, 0.4, 0.6, 1.0); out['viewport'] = v
+from glint.host import data as host_data
+v = bpy.data.materials.new('Viewport'); v.metallic = 1.0; v.roughness = 0.0
+if not host_data._nodes_always_on(v):  # 5.0+: every material is node-based, there is no viewport-only one
+    v.use_nodes = False
+    v.diffuse_color = (0.2, 0.4, 0.6, 1.0); out['viewport'] = v
 res = {k: list(gather.material_info(m)[0].row()) for k, m in out.items()}
 print('MATS' + json.dumps(res))
 """
@@ -237,4 +242,5 @@ def test_material_mapping_inside_blender(blender):
     assert res["matte"][:3] == [0.0, 0.0, 0.0]
     assert res["hardness"] == approx([0.04, 0.04, 0.04, 127.75])
     assert res["mix"] == approx([0.25, 0.25, 0.25, 127.75])  # a quarter of a white mirror
-    assert res["viewport"] == approx([0.2, 0.4, 0.6, 127.75])
+    if "viewport" in res:  # Blenders that still have materials without nodes
+        assert res["viewport"] == approx([0.2, 0.4, 0.6, 127.75])

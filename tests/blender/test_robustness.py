@@ -89,27 +89,33 @@ def test_auto_falls_back_to_the_cpu(no_egl, samples):
 SETUP_CHECK = r"""
 import bpy, json
 from glint.logic import compositing as cg
+from glint.host import nodes as hn  # this Blender's compositor (its tree, node and socket names)
 s = bpy.context.scene
 res = {}
 def links(tree):
     return sorted(f"{l.from_node.name}:{l.from_socket.name}->{l.to_node.name}:{l.to_socket.name}" for l in tree.links)
+def nodes_on():
+    return not hn.tree_switch_is_off(s)
 # A scene without compositing nodes: Glint switches them on and off again.
-s.use_nodes = False
+if nodes_on(): hn.release_tree(s)
 s.glint.enabled = True
-res['plain_on'] = {'use_nodes': s.use_nodes, 'links': links(s.node_tree)}
+res['plain_on'] = {'use_nodes': nodes_on(), 'links': links(hn.scene_tree(s))}
 s.glint.enabled = False
-res['plain_off'] = {'use_nodes': s.use_nodes, 'group': cg.GROUP_NAME in bpy.data.node_groups,
+res['plain_off'] = {'use_nodes': nodes_on(), 'group': cg.GROUP_NAME in bpy.data.node_groups,
                     'images': [n for n in cg.ALL_IMAGES if n in bpy.data.images]}
 # A user tree: Render Layers -> Glare -> Composite, and a Viewer on the render.
-s.use_nodes = True
-t = s.node_tree
-rl = t.nodes['Render Layers']; comp = t.nodes['Composite']
+t = hn.scene_tree(s, create=True)
+rl = t.nodes['Render Layers']; comp_in = hn.frame_outputs(t)[0]
 glare = t.nodes.new('CompositorNodeGlare'); glare.name = 'User Glare'
 viewer = t.nodes.new('CompositorNodeViewer'); viewer.name = 'User Viewer'
 for l in list(t.links): t.links.remove(l)
 t.links.new(rl.outputs['Image'], glare.inputs['Image'])
-t.links.new(glare.outputs['Image'], comp.inputs['Image'])
+t.links.new(glare.outputs['Image'], comp_in)
 t.links.new(rl.outputs['Image'], viewer.inputs['Image'])
+# The names this Blender gives what the assertions mention.
+res['names'] = {'frame': f"{comp_in.node.name}:{comp_in.name}", 'frame_node': comp_in.node.name,
+                'dir': next(n for n in hn.PASS_OUTPUTS['glossy_direct'] if n in rl.outputs),
+                'col': next(n for n in hn.PASS_OUTPUTS['glossy_color'] if n in rl.outputs)}
 res['user_before'] = links(t)
 s.glint.enabled = True
 s.glint.write_layers_exr = True
@@ -118,22 +124,23 @@ res['exr_node'] = cg.EXR_NODE_NAME in t.nodes
 s.glint.debug_view = 'REFLECTION'
 g = bpy.data.node_groups[cg.GROUP_NAME]
 res['passes'] = [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]
-res['switch'] = [g.nodes['show_reflection'].check, g.nodes['show_debug'].check]
+res['switch'] = [hn.switch_is_on(g.nodes['show_reflection']), hn.switch_is_on(g.nodes['show_debug'])]
+res['names']['rgb'] = t.nodes[cg.WORLD_COLOUR_NODE].outputs[0].name
 # The second bounce: Auto runs it from two reflective objects on (the factory cube is one)
 from glint import compositor as glint_compositor
-bounce = [g.nodes['use_bounce'].check]
+bounce = [hn.switch_is_on(g.nodes['use_bounce'])]
 plane = bpy.data.objects.new('Second Reflector', bpy.data.meshes.new('Second Reflector'))
 plane.data.materials.append(s.objects['Cube'].material_slots[0].material)
 s.collection.objects.link(plane)
 glint_compositor.ensure(s)
-bounce.append(g.nodes['use_bounce'].check)
+bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
 s.glint.second_bounce = 'OFF'
-bounce.append(g.nodes['use_bounce'].check)
+bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
 plane.hide_render = True
 s.glint.second_bounce = 'ON'
-bounce.append(g.nodes['use_bounce'].check)
+bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
 s.glint.second_bounce = 'AUTO'
-bounce.append(g.nodes['use_bounce'].check)
+bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
 bpy.data.objects.remove(plane)
 res['bounce'] = bounce
 s.glint.preset = 'HIGH'
@@ -153,7 +160,7 @@ res['textured_on'] = {'links': links(t), 'nodes': sorted(n.name for n in t.nodes
 s.glint.enabled = False
 res['user_off'] = links(t)
 res['nodes_off'] = sorted(n.name for n in t.nodes)
-res['use_nodes_off'] = s.use_nodes
+res['use_nodes_off'] = nodes_on()
 res['group_off'] = cg.GROUP_NAME in bpy.data.node_groups
 res['passes_off'] = [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]
 print('SETUP' + json.dumps(res))
@@ -163,15 +170,19 @@ print('SETUP' + json.dumps(res))
 def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     log = blender.run(["--addons", "glint", "--python-expr", SETUP_CHECK])
     res = json.loads(next(line[5:] for line in log.splitlines() if line.startswith("SETUP")))
+    names = res["names"]  # Composite:Image, GlossDir... on 3.4 and 4.x; Group Output:Image, Glossy Direct... on 5.x
+    frame, frame_node = names["frame"], names["frame_node"]
     assert res["plain_on"]["use_nodes"] is True
     # The factory scene's world is one colour: S = that colour (an RGB node) x the weight image
-    world = ["Glint World Colour:RGBA->Glint:Specular Light", "Glint World Weight:Image->Glint:Specular Color"]
-    passes = ["Render Layers:GlossCol->Glint:Specular Color", "Render Layers:GlossDir->Glint:Specular Light"]
-    assert res["plain_on"]["links"] == sorted(["Glint:Image->Composite:Image", "Render Layers:Image->Glint:Image"]
+    world = [f"Glint World Colour:{names['rgb']}->Glint:Specular Light",
+             "Glint World Weight:Image->Glint:Specular Color"]
+    passes = sorted([f"Render Layers:{names['col']}->Glint:Specular Color",
+                     f"Render Layers:{names['dir']}->Glint:Specular Light"])
+    assert res["plain_on"]["links"] == sorted([f"Glint:Image->{frame}", "Render Layers:Image->Glint:Image"]
                                               + world)
     assert res["plain_off"] == {"use_nodes": False, "group": False, "images": []}
     assert res["user_on"] == sorted(["Render Layers:Image->Glint:Image", "Glint:Image->User Glare:Image",
-                                     "User Glare:Image->Composite:Image", "Glint:Image->User Viewer:Image"] +
+                                     f"User Glare:Image->{frame}", "Glint:Image->User Viewer:Image"] +
                                     world + ["Glint:Engine Specular->Glint EXR:EngineSpecular"] +
                                     [f"Glint:{name}->Glint EXR:{name}" for name in
                                      ("Image", "Base", "Reflection", "Position", "Normal", "Specular", "UV",
@@ -183,7 +194,7 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     assert res["textured_on"]["passes"] == [True, True] and res["passes_off"] == [False, False]
     assert sorted(set(res["textured_on"]["links"]) - set(res["user_on"])) == passes
     assert sorted(set(res["user_on"]) - set(res["textured_on"]["links"])) == world
-    assert res["textured_on"]["nodes"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer",
+    assert res["textured_on"]["nodes"] == sorted([frame_node, "Render Layers", "User Glare", "User Viewer",
                                                   "Glint", "Glint EXR"])
     assert res["switch"] == [True, False]
     # Auto with one reflector, Auto with two, Off, On with the second hidden, Auto so
@@ -191,10 +202,10 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     high = res["core_high"]  # the add-on's presets are the core's
     assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"]]
     assert res["preset_after_edit"] == "CUSTOM"
-    assert res["nodes_on"] == sorted(["Composite", "Render Layers", "User Glare", "User Viewer", "Glint",
+    assert res["nodes_on"] == sorted([frame_node, "Render Layers", "User Glare", "User Viewer", "Glint",
                                       "Glint EXR", "Glint World Colour", "Glint World Weight"])
     assert res["user_off"] == res["user_before"]
-    assert res["nodes_off"] == ["Composite", "Render Layers", "User Glare", "User Viewer"]
+    assert res["nodes_off"] == sorted([frame_node, "Render Layers", "User Glare", "User Viewer"])
     assert res["use_nodes_off"] is True and res["group_off"] is False
 
 

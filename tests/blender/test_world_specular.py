@@ -79,9 +79,11 @@ def test_a_world_with_a_texture_keeps_the_passes(blender, samples, session_dir):
 
 
 def test_eevee_ssr_keeps_the_passes_under_a_uniform_world(blender, samples, session_dir):
-    # Eevee's own SSR replaces the world's specular in the frame: only the passes hold it
+    # Eevee's own reflections (Legacy's SSR, Next's ray tracing) replace the
+    # world's specular in the frame: only the passes hold it
     out, log, flags = render(blender, samples, session_dir, "world_ssr",
-                             REPORT + "bpy.context.scene.eevee.use_ssr = True\n")
+                             REPORT + "from glint.host import engines\n"
+                             "engines.set_eevee_traces_reflections(bpy.context.scene, True)\n")
     assert flags == ["True", "True"]
     assert "comes from the Eevee passes" in log
     assert "Glint: frame 1: reflections composited" in log

@@ -61,3 +61,35 @@ def set_eevee_traces_reflections(scene, on: bool) -> None:
 
 def eevee_reflections_name(scene) -> str:
     return "Screen Space Reflections" if eevee_is_legacy(scene) else "Ray Tracing"
+
+
+def set_eevee_traces_reflections_for_comparison(scene, on: bool) -> None:
+    """Eevee's own reflections as the benchmarks compare them: Legacy's SSR at
+    full resolution (its half-resolution trace is visibly coarser); Next's ray
+    tracing at its defaults, which is what its users get."""
+    set_eevee_traces_reflections(scene, on)
+    if hasattr(scene.eevee, "use_ssr_halfres"):
+        scene.eevee.use_ssr_halfres = False
+
+
+def set_eevee_ambient_occlusion(scene, distance: float) -> None:
+    """Eevee's occlusion of the world light over ``distance`` (Legacy's GTAO;
+    Next always occludes, by horizon scan, whose reach is this distance)."""
+    ee = scene.eevee
+    if hasattr(ee, "use_gtao"):
+        ee.use_gtao = True
+    if hasattr(ee, "gtao_distance"):
+        ee.gtao_distance = distance
+    elif hasattr(ee, "fast_gi_distance"):
+        ee.fast_gi_distance = distance
+
+
+def own_reflections_note(scene):
+    """The panel's and log's sentence when Eevee traces reflections of its own
+    under Glint, else None. Glint then takes Eevee's specular from its passes
+    and replaces it, traced reflections included, wherever Glint finds a hit;
+    where Glint finds none Eevee's own reflection stays."""
+    if not is_eevee(scene.render.engine) or not eevee_traces_reflections(scene):
+        return None
+    return (f"Eevee's {eevee_reflections_name(scene)} is on: Glint replaces it where it finds a "
+            "reflection and keeps it elsewhere; turning it off saves its render time")

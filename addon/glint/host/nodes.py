@@ -113,16 +113,30 @@ def default_tree_kinds() -> Tuple[Tuple[str, ...], ...]:
             ("CompositorNodeRLayers", "CompositorNodeViewer", "NodeGroupOutput"))
 
 
+def compositor_places_regions() -> bool:
+    """Whether a smaller image translated by the offset image lands where
+    ``logic/compositing.image_region`` cut it from (the compositor then runs
+    Map UV on the region only). True of the compositor of 3.x-4.1, whose trees
+    still offer the Tiled and Full Frame execution models; the compositors
+    after it take a Translate's offset as a single value, not from an image,
+    and left the region's reflections out (tests/blender/test_region.py), so
+    there the group works on the whole frame."""
+    return "execution_mode" in bpy.types.CompositorNodeTree.bl_rna.properties
+
+
 # Render Layers outputs by pass: 3.4-4.5 short names, 5.0+ words.
 PASS_OUTPUTS = {"glossy_direct": ("GlossDir", "Glossy Direct"),
                 "glossy_color": ("GlossCol", "Glossy Color")}
 
 
 def pass_output(render_layers, pass_key: str):
-    """The Render Layers output of a pass, or None when the engine does not write it."""
+    """The Render Layers output of a pass, or None when this Blender lists none.
+    An output listed but not enabled (the engine does not write the pass) is
+    returned all the same: linked, it gives black, and it comes alive when the
+    pass is switched on."""
     for name in PASS_OUTPUTS[pass_key]:
         sock = render_layers.outputs.get(name)
-        if sock is not None and getattr(sock, "enabled", True):
+        if sock is not None:
             return sock
     return None
 
@@ -242,12 +256,17 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
                 setattr(node, key, value)
             node.inputs[1].default_value = sigma / size
     elif kind == "translate":
+        # Whole-pixel moves (logic/compositing.image_region): Nearest keeps them
+        # exact where a Blender interpolates (4.2+); 3.4 has no such option.
         if sockets:
             for name in ("Extension X", "Extension Y"):
                 _set_menu(node, name, "Clip")
+            _set_menu(node, "Interpolation", "Nearest")
         else:
             node.use_relative = False
             node.wrap_axis = "NONE"
+            if hasattr(node, "interpolation"):
+                node.interpolation = "Nearest"
     elif kind == "map_uv":
         if not sockets:
             node.alpha = 0  # no fading by uv derivatives: Map UV only premultiplies by vis

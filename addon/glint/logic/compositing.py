@@ -427,14 +427,30 @@ def image_region(vis: np.ndarray, lod: np.ndarray, pad: int = REGION_PAD) -> Tup
     if rows.size == 0:
         return 0, 0, 1, 1
     cols = np.flatnonzero(touched[rows[0]:rows[-1] + 1].any(axis=0))
-    return (max(0, int(cols[0]) - pad), max(0, int(rows[0]) - pad),
-            min(w, int(cols[-1]) + 1 + pad), min(h, int(rows[-1]) + 1 + pad))
+    x0, x1 = _same_parity(max(0, int(cols[0]) - pad), min(w, int(cols[-1]) + 1 + pad), w)
+    y0, y1 = _same_parity(max(0, int(rows[0]) - pad), min(h, int(rows[-1]) + 1 + pad), h)
+    return x0, y0, x1, y1
+
+
+def _same_parity(lo: int, hi: int, size: int) -> Tuple[int, int]:
+    """[lo, hi) grown by a pixel where its length and the frame's differ in
+    parity: a canvas centred on the frame then sits on whole pixels, and the
+    Translate that puts it back moves it by whole pixels, which every
+    compositor does exactly (a half-pixel shift is rounded one way by 3.4 and
+    interpolated by 4.2 and later)."""
+    if (hi - lo) % 2 != size % 2:
+        if hi < size:
+            hi += 1
+        else:
+            lo -= 1
+    return lo, hi
 
 
 def region_offset(region: Tuple[int, int, int, int], width: int, height: int) -> Tuple[float, float]:
     """The Translate that puts a region-sized canvas, which Blender centres on
-    the frame, at its place: (x0 + bw/2 - W/2, y0 + bh/2 - H/2) pixels, a
-    multiple of one half (checked with Blender 3.4, Tiled and Full Frame)."""
+    the frame, at its place: (x0 + bw/2 - W/2, y0 + bh/2 - H/2) pixels, whole
+    pixels for a region from :func:`image_region` (checked with Blender 3.4,
+    Tiled and Full Frame, 4.3 and 5.2)."""
     x0, y0, x1, y1 = region
     return x0 + (x1 - x0) / 2.0 - width / 2.0, y0 + (y1 - y0) / 2.0 - height / 2.0
 
