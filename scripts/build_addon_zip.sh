@@ -22,7 +22,13 @@ blender=${BLENDER:-blender}
 kind=${GLINT_PACKAGE:-auto}
 if [[ $kind == auto ]]; then
   # A feature test, not a version number: does this Blender build extensions?
-  if "$blender" --command extension build --help >/dev/null 2>&1; then kind=extension; else kind=legacy; fi
+  # (Before 4.2 `--command` is an unknown argument and `--help` prints Blender's
+  # own usage with status 0, so the test is the extension builder's own option.)
+  if "$blender" --command extension build --help 2>/dev/null | grep -q -- "--source-dir"; then
+    kind=extension
+  else
+    kind=legacy
+  fi
 fi
 [[ $kind == extension || $kind == legacy ]] || { echo "build_addon_zip: GLINT_PACKAGE=$kind: expected extension, legacy or auto" >&2; exit 1; }
 

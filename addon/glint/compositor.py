@@ -295,7 +295,7 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         change("the compositor's nodes are off")
         host_nodes.scene_tree(scene, create=True)
         glint.owns_use_nodes = True
-        turned_on.append("the compositor's nodes (Use Nodes)")
+        turned_on.append(host_nodes.tree_switch_label())
     tree = host_nodes.scene_tree(scene)
     group = find_group()
     if not _group_is_current(group):
@@ -332,7 +332,7 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         change("the compositor has no Composite node")
         sock = host_nodes.add_frame_output(tree, (gnode.location.x + 300, gnode.location.y + 200))
         tree.links.new(gnode.outputs["Image"], sock)
-        turned_on.append("a Composite node fed by Glint")
+        turned_on.append(f"{host_nodes.frame_output_label()} fed by Glint")
     # The group is never muted: a frame Glint does not handle gets zeroed images
     # instead (clear_images), which the render sees; older versions muted it.
     if gnode.mute:

@@ -14,24 +14,28 @@ pytestmark = pytest.mark.blender
 # Run in Blender on the sample (Glint enabled by make_samples.py): switch Glint
 # off (which takes its nodes out), then break the compositor as an old file has it.
 VARIANTS = {
-    "nodes_off": "s.glint.enabled = False; s.use_nodes = False",
-    "compositing_off": "s.glint.enabled = False; s.use_nodes = True; s.render.use_compositing = False",
+    "nodes_off": "s.glint.enabled = False; hn.release_tree(s)",
+    "compositing_off": "s.glint.enabled = False; hn.scene_tree(s, create=True); s.render.use_compositing = False",
     "no_composite_node": (
-        "s.glint.enabled = False; s.use_nodes = True; t = s.node_tree\n"
-        "for n in [n for n in t.nodes if n.bl_idname == 'CompositorNodeComposite']: t.nodes.remove(n)\n"
+        "s.glint.enabled = False; t = hn.scene_tree(s, create=True)\n"
+        "for n in {x.node for x in hn.frame_outputs(t)}: t.nodes.remove(n)\n"
         "rl = next(n for n in t.nodes if n.bl_idname == 'CompositorNodeRLayers')\n"
         "v = t.nodes.get('Viewer') or t.nodes.new('CompositorNodeViewer')\n"
         "t.links.new(rl.outputs['Image'], v.inputs['Image'])"),
     # Saved with Glint on, then compositing switched off by hand (load_post and render_init repair it).
-    "enabled_everything_off": "s.use_nodes = False; s.render.use_compositing = False",
+    "enabled_everything_off": "hn.release_tree(s); s.render.use_compositing = False",
 }
 
+# hn: this Blender's compositor tree (Use Nodes and scene.node_tree before 5.0,
+# the compositing node group since), so the old files are made the same on each.
 SAVE = """
 import bpy
+from glint.host import nodes as hn
 s = bpy.context.scene
 {code}
-print('SAVED', s.use_nodes, s.render.use_compositing, s.glint.enabled,
-      sorted(n.bl_idname for n in s.node_tree.nodes) if s.node_tree else None)
+t = hn.scene_tree(s)
+print('SAVED', not hn.tree_switch_is_off(s), s.render.use_compositing, s.glint.enabled,
+      sorted(n.bl_idname for n in t.nodes) if t else None)
 bpy.ops.wm.save_as_mainfile(filepath={path!r})
 """
 
@@ -76,8 +80,9 @@ def test_enabling_glint_in_an_old_file_gives_reflections(variant, old_files, ref
 
 
 def test_the_panel_says_what_was_turned_on_and_off_restores_it(old_files, blender):
-    code = ("import bpy\ns = bpy.context.scene\ns.glint.enabled = True\n" + PANELS +
-            "\ns.glint.enabled = False\nprint('AFTER', s.use_nodes, s.render.use_compositing)\n")
+    code = ("import bpy\nfrom glint.host import nodes as hn\ns = bpy.context.scene\ns.glint.enabled = True\n" +
+            PANELS + "\ns.glint.enabled = False\n"
+            "print('AFTER', not hn.tree_switch_is_off(s), s.render.use_compositing)\n")
     log = blender.run([old_files["compositing_off"], "--addons", "glint", "--python-expr", code])
     assert "Post Processing > Compositing" in next(l for l in log.splitlines() if l.startswith("Glint: scene"))
     labels = next(l for l in log.splitlines() if l.startswith("LABELS"))

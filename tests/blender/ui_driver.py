@@ -38,6 +38,7 @@ os.makedirs(OUT, exist_ok=True)
 scene = bpy.context.scene
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scene_config  # noqa: E402  (beside this file)
+from glint.host import nodes as hn  # noqa: E402,F401  (steps' code reaches the compositor tree with it)
 
 scene_config.apply(scene, cfg)
 r = scene.render

@@ -66,6 +66,18 @@ def tree_switch_is_off(scene) -> bool:
     return not scene.use_nodes or scene.node_tree is None
 
 
+def tree_switch_label() -> str:
+    """What the user sees turned on when :func:`scene_tree` made the tree."""
+    if hasattr(bpy.types.Scene, "compositing_node_group"):
+        return "a compositing node tree (Compositing workspace)"
+    return "the compositor's nodes (Use Nodes)"
+
+
+def frame_output_label() -> str:
+    """The node :func:`add_frame_output` adds, in the user's words."""
+    return "a Composite node" if _has_type("CompositorNodeComposite") else "the node tree's Group Output"
+
+
 def release_tree(scene) -> None:
     """Undo what :func:`scene_tree` turned on, for a tree Glint made on its own."""
     if hasattr(scene, "compositing_node_group"):
