@@ -40,10 +40,6 @@ double near_value(dvec3 v) {
   return r;
 }
 
-// A position texel counts as seen when w > 0 and every channel is finite
-// (non-finite values are data meaning "nothing seen", as on the CPU).
-bool texel_seen(vec4 p) { return p.w > 0.0 && finite_v4(p); }
-
 // SPEC fix 3: the nearest texel at floor(uv * size); off the image or on an
 // unseen texel is a miss, and a miss reads as (0, 0, 0, 0).
 bool fetch_position(vec2 uv, out vec4 p) {
@@ -60,15 +56,9 @@ bool fetch_position(vec2 uv, out vec4 p) {
   return false;
 }
 
-// The specular gate of the trace: the seed returns early where the specular
-// amount is not positive (glint::is_reflective).
-bool is_reflective(vec4 s) {
-  precise float amount = (s.r + s.g + s.b) / 3.0;
-  return amount > 0.0 && finite_f(amount);
-}
-
 // SPEC fix 4: unseen pixels, zero or non-finite normals and a position at the
 // eye report 0.
+// The specular gate: the seed returns early where a pixel does not reflect.
 bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
   if (u_has_specular && !is_reflective(texelFetch(u_specular, px, 0))) return false;
   vec4 p = texelFetch(u_position, px, 0);

@@ -51,7 +51,7 @@ inline const char* to_string(March m) { return march_info(m).name; }
 // of every other row first, and each other pixel only where those traced
 // around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
 // backends decide by this.
-constexpr float kHizReuseResolution = 0.5f;
+constexpr float kHizReuseResolution = hiz::kReuseResolution;
 inline bool hiz_reuses_rays(const TraceOptions& o) {
   return o.march == March::Hiz && o.resolution <= kHizReuseResolution;
 }

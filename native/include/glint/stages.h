@@ -23,9 +23,6 @@
 
 namespace glint {
 
-// Blender Internal's largest hardness (511) as the book's shininess (/ 4).
-constexpr float kMaxShininess = 127.75f;
-
 // Specular amount and roughness of one specular-buffer pixel, as the seed's
 // reflection pass defines them. Shared so every backend and test agrees.
 inline float specular_amount(const float* spec) { return (spec[0] + spec[1] + spec[2]) / 3.0f; }
@@ -45,14 +42,13 @@ inline float roughness_of(const float* spec) {
 inline float ggx_alpha_of(const float* spec) {
   const float r = roughness_of(spec);
   if (!(r > 0.0f)) return 0.0f;
-  const float hardness = (1.0f - r) * (4.0f * kMaxShininess);
+  const float hardness = (1.0f - r) * (kHardnessPerShininess * kMaxShininess);
   return std::sqrt(2.0f / (hardness + 2.0f));
 }
 // tan of the half-angle of a GGX reflection cone: the half-vector cone that
 // holds half of D's projected mass has tan = alpha, the reflected direction
 // turns twice as far: tan(2 atan(alpha)) = 2 alpha / (1 - alpha^2), capped
-// at kMaxConeTan where the cone opens to a half-space.
-constexpr float kMaxConeTan = 16.0f;
+// at kMaxConeTan (glint/schema.h) where the cone opens to a half-space.
 inline float cone_tan(float alpha) {
   const float d = 1.0f - alpha * alpha;
   const float t = 2.0f * alpha;
@@ -87,7 +83,7 @@ inline bool is_reflective(const float* spec) {
 
 // Material specular, the book's mapping: Blender Internal hardness 1..511,
 // shininess = hardness / 4 (511 -> 127.75), alpha = clamp(shininess / 127.75, 0, 1).
-inline float shininess_from_hardness(float hardness) { return hardness / 4.0f; }
+inline float shininess_from_hardness(float hardness) { return hardness / kHardnessPerShininess; }
 float shininess_to_alpha(float shininess);
 
 // What the trace stage needs to know about which pixels matter. With a
