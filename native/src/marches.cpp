@@ -1,12 +1,10 @@
-// The table of marches (glint/marches.h) and the input checks every stage
-// passes through, whichever backend runs it.
+// The table of marches (glint/marches.h).
 #include "glint/marches.h"
 
 #include <string>
 
 #include "cpu/trace.h"
 #include "glint/errors.h"
-#include "glint/stages.h"
 
 namespace glint {
 
@@ -75,55 +73,6 @@ const MarchInfo& march_info(const std::string& name) {
   for (const MarchInfo& info : march_table())
     if (name == info.name) return info;
   throw InvalidArgument("march", "expected one of " + march_names() + ", got \"" + name + "\"");
-}
-
-void require_image(const Image& img, const char* name) {
-  if (img.width <= 0 || img.height <= 0)
-    throw InvalidArgument(name, "expected a non-empty image, got " + std::to_string(img.width) +
-                                    "x" + std::to_string(img.height));
-  if (img.width > kMaxImageSide || img.height > kMaxImageSide)
-    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
-                                    " pixels a side, got " + std::to_string(img.width) + "x" +
-                                    std::to_string(img.height));
-  if (img.data.size() != img.pixel_count() * 4)
-    throw InvalidArgument(name, "pixel storage does not match its size");
-}
-
-void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name) {
-  require_image(b, b_name);
-  if (a.width != b.width || a.height != b.height)
-    throw InvalidArgument(b_name, std::string("expected the size of ") + a_name + " (" +
-                                      std::to_string(a.width) + "x" + std::to_string(a.height) +
-                                      "), got " + std::to_string(b.width) + "x" +
-                                      std::to_string(b.height));
-}
-
-void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
-  require_image(in.position, "position");
-  require_same_size(in.position, "position", in.normal, "normal");
-  if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
-  if (in.back_position)
-    require_same_size(in.position, "position", *in.back_position, "back_position");
-  validate(opt);
-  validate_projection(in.projection);
-  const MarchInfo& info = march_info(opt.march);
-  if (info.needs_mesh && !in.mesh)
-    throw InvalidArgument("mesh", std::string("march \"") + info.name +
-                                      "\" traces the scene's triangles: pass mesh=(vertices, triangles)");
-}
-
-void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
-                                    const Mat4& projection) {
-  require_image(position, "position");
-  require_same_size(position, "position", normal, "normal");
-  require_same_size(position, "position", specular, "specular");
-  validate_projection(projection);
-}
-
-void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular) {
-  require_image(color, "reflection_color");
-  require_same_size(color, "reflection_color", uv, "uv");
-  require_same_size(color, "reflection_color", specular, "specular");
 }
 
 }  // namespace glint
