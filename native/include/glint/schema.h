@@ -159,11 +159,11 @@ inline constexpr Option max_distance{"max_distance", Type::Float, 15.0, nullptr,
 inline constexpr Option resolution{"resolution", Type::Float, 0.3, nullptr, 0.0, 1.0, "share", nullptr,
                                    "share of the pixels a ray crosses that the coarse pass visits"};
 inline constexpr Option steps{"steps", Type::Int, 10, nullptr, 0, 1000000, "iterations", nullptr,
-                              "iteration budget; what it counts for each march: marches()"};
+                              "iteration budget; what it counts depends on the march (the table of marches)"};
 inline constexpr Option thickness{"thickness", Type::Float, 0.5, nullptr, 0.0, 1e30, "view units", nullptr,
                                   "how far behind a surface still counts as a hit"};
 inline constexpr Option march{"march", Type::Name, 0, "seed", 0, 0, "", nullptr,
-                              "how rays are marched: a name from marches()"};
+                              "how rays are marched: a name from the table of marches"};
 inline constexpr Option blocked{"blocked", Type::Name, 0, "miss", 0, 0, "", kBlockedNames,
                                 "what a hiz ray blocked by a surface it passes behind reports"};
 // The look.
