@@ -137,7 +137,7 @@ def test_an_occluder_is_what_hides_the_hit():
         assert (hidden | late)[occluder].mean() >= bar
 
 
-EDGE_FADE = 0.075  # docs/marches.md: visibility fades over this share of the screen at its edges
+from reference_hiz import EDGE_FADE  # noqa: E402  (docs/marches.md: the fade at the screen's edges)
 
 
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
