@@ -42,9 +42,12 @@ pyb::dict option_dict(const schema::Option& o) {
     d["default"] = o.initial_name;
     d["choices"] = o.choices ? pyb::object(names(o)) : pyb::object(pyb::none());
   } else {
+    // The default is a value of the option's type; the limits are compared in
+    // double (options.cpp), so they are given as such.
+    const schema::Type limits = o.type == schema::Type::Int ? o.type : schema::Type::Double;
     d["default"] = number(o.initial, o.type);
-    d["min"] = number(o.min, o.type);
-    d["max"] = number(o.max, o.type);
+    d["min"] = number(o.min, limits);
+    d["max"] = number(o.max, limits);
   }
   return d;
 }

@@ -99,6 +99,8 @@ class GlState {
   GBufferImages rasterize(const RasterInputs& in);
 
   void compile_for_test(const std::string& entry);
+  // Compiles `source` (a test's own embedded shader) as the entry `entry`.
+  void compile_source_for_test(const std::string& entry, const std::string& source, FileNameFn file_name);
 
  private:
   // Textures are kept between calls and reallocated only when the size

@@ -7,7 +7,6 @@
 #include "glint/errors.h"
 
 namespace glint::gl {
-namespace {
 
 GLenum stage_of(const std::string& entry) {
   auto ends = [&](const char* ext) {
@@ -21,6 +20,8 @@ GLenum stage_of(const std::string& entry) {
   throw Error("glint GL: cannot tell the shader stage of \"" + entry + "\" from its extension");
 }
 
+namespace {
+
 // Reads a run of digits at s[i]; false when there is none.
 bool digits_at(const std::string& s, size_t& i, long& value) {
   const size_t start = i;
@@ -30,7 +31,7 @@ bool digits_at(const std::string& s, size_t& i, long& value) {
   return i > start;
 }
 
-std::string map_line(const std::string& line, const std::string& entry) {
+std::string map_line(const std::string& line, const std::string& entry, FileNameFn file_name) {
   // The first "<n>:<m>" or "<n>(<m>)" that is not part of a longer word.
   for (size_t i = 0; i < line.size(); ++i) {
     if (!std::isdigit(static_cast<unsigned char>(line[i]))) continue;
@@ -58,7 +59,7 @@ std::string map_line(const std::string& line, const std::string& entry) {
       }
       ++k;
     }
-    const char* file = string_no == 0 ? entry.c_str() : embedded_file_name(static_cast<int>(string_no));
+    const char* file = string_no == 0 ? entry.c_str() : file_name(static_cast<int>(string_no));
     if (!file) return line;
     return line.substr(0, i) + "shaders/" + file + ":" + std::to_string(line_no) + line.substr(k);
   }
@@ -77,19 +78,19 @@ std::string stage_name(GLenum stage) {
 
 }  // namespace
 
-std::string map_shader_log(const std::string& log, const std::string& entry) {
+std::string map_shader_log(const std::string& log, const std::string& entry, FileNameFn file_name) {
   std::istringstream in(log);
   std::string line, out;
   while (std::getline(in, line)) {
     if (line.empty()) continue;
-    out += map_line(line, entry);
+    out += map_line(line, entry, file_name);
     out += '\n';
   }
   return out;
 }
 
 GLuint compile_source(const Api& gl, GLenum stage, const std::string& source,
-                      const std::string& entry) {
+                      const std::string& entry, FileNameFn file_name) {
   GLuint shader = gl.CreateShader(stage);
   if (!shader) throw Error("glint GL: glCreateShader failed for shaders/" + entry);
   const char* text = source.c_str();
@@ -105,7 +106,7 @@ GLuint compile_source(const Api& gl, GLenum stage, const std::string& source,
     log.resize(std::char_traits<char>::length(log.c_str()));
     gl.DeleteShader(shader);
     throw Error("glint GL: compiling the " + stage_name(stage) + " shader shaders/" + entry +
-                " failed:\n" + map_shader_log(log, entry));
+                " failed:\n" + map_shader_log(log, entry, file_name));
   }
   return shader;
 }
