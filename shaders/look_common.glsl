@@ -1,6 +1,6 @@
 // Material helpers of the physically based look, the GLSL twins of
 // glint::roughness_of, ggx_alpha_of and cone_tan
-// (native/include/glint/stages.h), in their operation order. Needs
+// (native/include/glint/material.h), in their operation order. Needs
 // common.glsl (and so schema.glsl).
 
 float look_roughness(vec4 s) { return 1.0 - clamp01(finite_f(s.a) ? s.a : 1.0); }

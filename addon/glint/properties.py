@@ -127,7 +127,7 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
     preset_name: StringProperty(default=sl.DEFAULT_PRESET, options={"HIDDEN"})
     # The core's trace default. Rendering follows preset_name unless it is
     # Custom; a default of the default preset's march would change what files
-    # saved with Custom and an untouched March render (docs/addon.md).
+    # saved with Custom and an untouched March render.
     march_name: StringProperty(default=sl.DEFAULT_MARCH, options={"HIDDEN"})
     preset: EnumProperty(name="Quality", items=_preset_items, get=_get_preset, set=_set_preset,
                          update=_on_preset,
