@@ -17,12 +17,13 @@
 set(_GLINT_EMBED_SCRIPT "${CMAKE_CURRENT_LIST_FILE}")
 
 # glint_embed_shaders(<target> OUTPUT <file.cpp> BASE_DIR <dir> FILES <relative paths>...
-#                     [GENERATED <name>=<absolute path>...] [NAMESPACE <c++ namespace>])
-# GENERATED files (written by the build, e.g. schema.glsl) are included by
-# name as if they were in BASE_DIR. NAMESPACE (default glint::gl) lets a test
+#                     [EXTRA <name>=<absolute path>...] [NAMESPACE <c++ namespace>])
+# EXTRA files live outside BASE_DIR (schema.glsl, written by the build; a
+# march folder's shaders) and are embedded and included by name as if they
+# were in BASE_DIR. NAMESPACE (default glint::gl) lets a test
 # embed shaders of its own without clashing with the library's.
 function(glint_embed_shaders target)
-  cmake_parse_arguments(ARG "" "OUTPUT;BASE_DIR;NAMESPACE" "FILES;GENERATED" ${ARGN})
+  cmake_parse_arguments(ARG "" "OUTPUT;BASE_DIR;NAMESPACE" "FILES;EXTRA" ${ARGN})
   if(NOT ARG_NAMESPACE)
     set(ARG_NAMESPACE "glint::gl")
   endif()
@@ -30,13 +31,13 @@ function(glint_embed_shaders target)
   foreach(f IN LISTS ARG_FILES)
     list(APPEND deps "${ARG_BASE_DIR}/${f}")
   endforeach()
-  foreach(g IN LISTS ARG_GENERATED)
+  foreach(g IN LISTS ARG_EXTRA)
     string(REGEX REPLACE "^[^=]*=" "" gpath "${g}")
     list(APPEND deps "${gpath}")
   endforeach()
   # A list cannot cross the command line intact; '|' never appears in a path we accept.
   string(REPLACE ";" "|" files_arg "${ARG_FILES}")
-  string(REPLACE ";" "|" generated_arg "${ARG_GENERATED}")
+  string(REPLACE ";" "|" generated_arg "${ARG_EXTRA}")
   add_custom_command(
     OUTPUT "${ARG_OUTPUT}"
     COMMAND "${CMAKE_COMMAND}"
@@ -64,7 +65,7 @@ string(REPLACE "|" ";" _files "${GLINT_SHADER_FILES}")
 string(REPLACE "|" ";" _generated "${GLINT_SHADER_GENERATED}")
 set(_delim "glint_shader")
 
-# Generated files: listed after the others, read from where the build wrote them.
+# EXTRA files: listed after the others, read from where they are.
 foreach(g IN LISTS _generated)
   string(REGEX MATCH "^[^=]*" _gname "${g}")
   string(REGEX REPLACE "^[^=]*=" "" _gpath "${g}")

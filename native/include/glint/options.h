@@ -10,8 +10,10 @@
 namespace glint {
 
 // The marches; what each is and which options it reads is in glint/marches.h.
-// Its names are the table of marches'; schema::march names the default.
-enum class March {
+// Its names are the table of marches'; schema::march names the default. A
+// march's value is its position in native/marches/CMakeLists.txt: these are
+// the ones the core itself refers to, and a march added later needs none.
+enum class March : int {
   Seed,    // the chapter's two-pass march: coarse pass + bisection
   Linear,  // the book's older single march: fixed view-space steps, step back on a hit
   Hiz,     // min/max depth pyramid walk with ray-span hits

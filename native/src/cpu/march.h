@@ -42,11 +42,6 @@ void fill_view_distance(const Image& position, int y, float* out);
 // The whole view-distance buffer, rows in parallel.
 std::vector<float> view_distances(const Image& position, int threads);
 
-// Writes (u, v, visibility, visibility) for pixel (x, y); (0, 0, 0, 0) where
-// nothing was seen, the normal is zero, or the ray cannot be projected.
-void march_seed(const MarchSetup& s, int x, int y, float out[4]);
-void march_linear(const MarchSetup& s, int x, int y, float out[4]);
-
 // FIX 3 (docs/conventions.md): nearest texel at floor(uv * size); outside the image or on an
 // unseen texel is a miss. Returns the texel's index (or -1 on a miss) and
 // its view distance (0 on a miss: the seed's cleared texel).

@@ -1,14 +1,17 @@
 // The book's older linear march ("linear"): fixed view-space steps, stepping
 // back and approaching after a hit, exactly as the book's SSR section does,
 // in Blender's camera space. Shares the seed's origin checks and texel reads
-// (FIX 3 and 4 of docs/conventions.md, march.h).
+// (FIX 3 and 4 of docs/conventions.md, march.h). Its GL form is
+// trace_linear.frag beside this file; its row of the table of marches is at
+// the end.
 #include <cmath>
 
-#include "march.h"
-#include "ray.h"
-#include "trace.h"
+#include "cpu/march.h"
+#include "cpu/ray.h"
+#include "glint/marches.h"
 
 namespace glint::cpu {
+namespace {
 
 void march_linear(const MarchSetup& s, int x, int y, float out[4]) {
   out[0] = out[1] = out[2] = out[3] = 0.0f;
@@ -66,4 +69,22 @@ Image trace_linear(const TraceInputs& in, const TraceOptions& opt, int threads) 
   return trace_pixels(in, opt, threads, march_linear);
 }
 
+}  // namespace
 }  // namespace glint::cpu
+
+namespace glint {
+
+MarchInfo glint_march_linear() {
+  MarchInfo m;
+  m.name = "linear";
+  m.description = "The book's older march: fixed view-space steps, stepping back and approaching after a hit";
+  m.knobs = {{"max_distance", "length of the reflected ray, view units"},
+             {"steps", "view-space steps along the ray (max_distance / steps each)"},
+             {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}};
+  m.scratch_per_pixel = 4;  // one float view distance per texel
+  m.cpu = &cpu::trace_linear;
+  m.gl_program = "trace_linear.frag";
+  return m;
+}
+
+}  // namespace glint

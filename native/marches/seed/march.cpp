@@ -1,17 +1,17 @@
 // The seed chapter's two-pass march ("seed"), ported to Blender's camera
 // space (view distance = -z). The only departures from the seed are the four
 // fixes of docs/conventions.md, each marked FIX n below, plus work skipping
-// that cannot change the result (marked SKIP).
-#include "march.h"
-
+// that cannot change the result (marked SKIP). Its GL form is trace_seed.frag
+// beside this file; its row of the table of marches is at the end.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
+#include "cpu/march.h"
+#include "cpu/ray.h"
+#include "glint/marches.h"
 #include "parallel.h"
-#include "ray.h"
-#include "trace.h"
 
 namespace glint::cpu {
 namespace {
@@ -50,8 +50,8 @@ void onscreen_range(double sx, double sy, double ix, double iy, int64_t n, doubl
   if (k1 > n) k1 = n;
 }
 
-}  // namespace
-
+// Writes (u, v, visibility, visibility) for pixel (x, y); (0, 0, 0, 0) where
+// nothing was seen, the normal is zero, or the ray cannot be projected.
 void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
   out[0] = out[1] = out[2] = out[3] = 0.0f;
   V3 from, unit_from, normal;
@@ -217,4 +217,23 @@ Image trace_seed(const TraceInputs& in, const TraceOptions& opt, int threads) {
   return trace_pixels(in, opt, threads, march_seed);
 }
 
+}  // namespace
 }  // namespace glint::cpu
+
+namespace glint {
+
+MarchInfo glint_march_seed() {
+  MarchInfo m;
+  m.name = "seed";
+  m.description = "The seed chapter's two-pass march: a coarse pass over a share of the pixels, then bisection";
+  m.knobs = {{"max_distance", "length of the reflected ray, view units; also fades the reflection"},
+             {"resolution", "share of the pixels the ray crosses on screen that the coarse pass visits"},
+             {"steps", "bisection iterations after the first coarse hit"},
+             {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}};
+  m.scratch_per_pixel = 4;  // one float view distance per texel
+  m.cpu = &cpu::trace_seed;
+  m.gl_program = "trace_seed.frag";
+  return m;
+}
+
+}  // namespace glint
