@@ -177,17 +177,18 @@ void bind_trace(pyb::module_& m) {
         "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
         "memory_limit_mb"_a = t.memory_limit_mb,
         doc_with_options(
-        "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
-        "back_position: optional float32 [H, W, 4], the surface behind each pixel (w = 0 where\n"
-        "none), read by marches that use true thickness. mesh: (vertices float32 [N, 3], triangles int32 [M, 3]) in the same\n"
-        "view space, for marches that trace the scene's triangles ('exact').\n"
-        "specular: optional float32 [H, W, 4], the specular buffer: pixels that do not reflect\n"
-        "(mean rgb 0) are not traced and report 0, as pipeline() does; their normals still\n"
-        "serve the rays that hit them.\n"
-        "blocked='occluder' gives (u, v, weight, 0) at what hides the hit (docs/marches.md).\n"
-        "A request over memory_limit_mb raises MemoryLimitExceeded (a MemoryError).",
-        {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::blocked, &s::backend,
-         &s::threads, &s::memory_limit_mb}));
+            "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
+            "back_position: optional float32 [H, W, 4], the surface behind each pixel (w = 0 where\n"
+            "none), read by marches that use true thickness. mesh: (vertices float32 [N, 3],\n"
+            "triangles int32 [M, 3]) in the same view space, for marches that trace the scene's\n"
+            "triangles ('exact').\n"
+            "specular: optional float32 [H, W, 4], the specular buffer: pixels that do not reflect\n"
+            "(mean rgb 0) are not traced and report 0, as pipeline() does; their normals still\n"
+            "serve the rays that hit them.\n"
+            "blocked='occluder' gives (u, v, weight, 0) at what hides the hit (docs/marches.md).\n"
+            "A request over memory_limit_mb raises MemoryLimitExceeded (a MemoryError).",
+            {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::blocked, &s::backend,
+             &s::threads, &s::memory_limit_mb}));
   m.def("composite_layers", &py_composite_layers, "position"_a, "normal"_a, "specular"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = t.max_distance, "resolution"_a = t.resolution, "steps"_a = t.steps,
         "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "blocked"_a = to_string(t.blocked),
