@@ -186,17 +186,15 @@ inline constexpr Option memory_limit_mb{"memory_limit_mb", Type::Double, 0.0, nu
                                         nullptr, "what one call may allocate, 0 = GLINT_MEMORY_LIMIT_MB or half "
                                                  "of physical memory"};
 
-inline constexpr const Option* kOptions[] = {&max_distance, &resolution, &steps,     &thickness,
-                                             &march,        &blocked,    &weighting, &blur,
-                                             &blur_size,    &blur_separation, &combine, &backend,
-                                             &threads,      &memory_limit_mb};
+// Every option, in the order help texts list them.
+inline constexpr const Option* kOptions[] = {
+    &max_distance, &resolution, &steps,           &thickness, &march,   &blocked, &weighting,
+    &blur,         &blur_size,  &blur_separation, &combine,   &backend, &threads, &memory_limit_mb};
 
-// nullptr when there is no such option.
-inline const Option* find_option(std::string_view name) {
-  for (const Option* o : kOptions)
-    if (name == o->name) return o;
-  return nullptr;
-}
+// A named option's default must be one of its names: checked as the header compiles.
+static_assert(blocked.initial_index() >= 0 && weighting.initial_index() >= 0 && blur.initial_index() >= 0 &&
+                  combine.initial_index() >= 0 && backend.initial_index() >= 0,
+              "a named option's default is not among its choices");
 
 // The shortest decimal text that reads back as the same value of `type`
 // (15 -> "15.0", 0.3f -> "0.3"), valid in C++, GLSL and Python alike.
