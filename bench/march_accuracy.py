@@ -3,7 +3,7 @@
 
 Each scene's G-buffer is ray-cast exactly in float64 (tests/python/analytic.py),
 and so is every pixel's mirror hit; a march's reflected-uv buffer is scored
-against those hits as SPEC.md defines it: a pixel *reports* when its
+against those hits as docs/conventions.md defines it: a pixel *reports* when its
 visibility > 1e-3, precision is the share of reports within 1.5 px of the exact
 visible hit, recall the share of exact visible hits reported within 1.5 px.
 Times are medians of --repeat runs, each backend and march in the same process, the

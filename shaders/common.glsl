@@ -4,6 +4,10 @@
 // is chaotic enough (a hit or a miss) that one rounding difference changes
 // a pixel. Non-finite tests use the bit pattern, because `x - x == 0.0` or
 // isnan() may be folded away by an optimizing compiler.
+//
+// Every pass that includes this file gets the constants of
+// native/include/glint/schema.h (schema.glsl, written at build time).
+#include "schema.glsl"
 
 bool finite_f(float v) { return (floatBitsToUint(v) & 0x7f800000u) != 0x7f800000u; }
 bool finite_v3(vec3 v) { return finite_f(v.x) && finite_f(v.y) && finite_f(v.z); }
@@ -41,3 +45,20 @@ vec3 reflect3(vec3 i, vec3 n) {
 
 // The view distance of a view-space point: Blender's camera looks down -Z.
 float view_distance(vec3 v) { return -v.z; }
+
+// The G-buffer's two tests, as glint/material.h defines them for the CPU.
+// A position texel counts as seen when w > 0 and every channel is finite
+// (non-finite values are data meaning "nothing seen").
+bool texel_seen(vec4 p) { return p.w > 0.0 && finite_v4(p); }
+
+// The seed's specular amount: the mean of the specular rgb.
+float specular_amount(vec4 s) {
+  precise float amount = (s.r + s.g + s.b) / 3.0;
+  return amount;
+}
+
+// A pixel reflects when its specular amount is positive (and finite).
+bool is_reflective(vec4 s) {
+  precise float amount = specular_amount(s);
+  return amount > 0.0 && finite_f(amount);
+}

@@ -45,7 +45,7 @@ void main() {
   out_color = own;
   vec4 s = texelFetch(u_specular, px, 0);
   vec4 t = texelFetch(u_uv, px, 0);
-  if (!look_reflective(s) || !(clamp01(t.z) > 0.0)) return;
+  if (!is_reflective(s) || !(clamp01(t.z) > 0.0)) return;
   if (!finite_f(t.x) || !finite_f(t.y)) return;
   float alpha = look_ggx_alpha(s);
   if (!(alpha > 0.0)) return;

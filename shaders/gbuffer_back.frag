@@ -9,9 +9,8 @@ uniform sampler2D u_front;  // the front pass's position target
 uniform float u_depth_base;
 uniform float u_depth_scale;
 
-// A back face must lie this share of the front's view distance behind it
-// (kBackSeparation in native/src/cpu/raster.cpp).
-const float BACK_SEPARATION = 1e-6;
+// BACK_SEPARATION: how far behind the front a back face must lie.
+#include "schema.glsl"
 
 layout(location = 0) out vec4 out_back;
 

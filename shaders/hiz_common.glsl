@@ -1,18 +1,12 @@
 // What the Hi-Z base level and the Hi-Z walk share: the tangent plane of a
 // texel in NDC and its depth there, and a texel's thickness. Ports of the
 // helpers in native/src/cpu/march_hiz.cpp, same operation order.
-// Needs common.glsl and trace_common.glsl.
+// Needs common.glsl and trace_common.glsl. Its constants (FOOTPRINT_SPREAD,
+// CELL_NUDGE, EDGE_FADE ...) are schema.glsl's.
 
 uniform float u_inv[16];          // inverse projection, row-major (cpu::HizCamera)
 uniform sampler2D u_back;         // RGBA32F back-face layer, read when u_has_back
 uniform bool u_has_back;
-
-const float FOOTPRINT_SPREAD = 0.5;
-const float PLANE_TOLERANCE = 1e-5;
-const float BEHIND_SLACK = 1e-3;
-const float CELL_NUDGE = 1.0 / 64.0;
-const float EDGE_FADE = 0.075;
-const float UNCERTAIN = 0.5;
 
 bool normal_usable(vec3 n) { return finite_v3(n) && (n.x != 0.0 || n.y != 0.0 || n.z != 0.0); }
 

@@ -1,11 +1,7 @@
 // Material helpers of the physically based look, the GLSL twins of
-// glint::is_reflective, roughness_of, ggx_alpha_of and cone_tan
-// (native/include/glint/stages.h), in their operation order.
-
-bool look_reflective(vec4 s) {
-  precise float amount = (s.r + s.g + s.b) / 3.0;
-  return amount > 0.0 && finite_f(amount);
-}
+// glint::roughness_of, ggx_alpha_of and cone_tan
+// (native/include/glint/material.h), in their operation order. Needs
+// common.glsl (and so schema.glsl).
 
 float look_roughness(vec4 s) { return 1.0 - clamp01(finite_f(s.a) ? s.a : 1.0); }
 
@@ -14,16 +10,14 @@ float look_roughness(vec4 s) { return 1.0 - clamp01(finite_f(s.a) ? s.a : 1.0); 
 float look_ggx_alpha(vec4 s) {
   float r = look_roughness(s);
   if (!(r > 0.0)) return 0.0;
-  precise float hardness = (1.0 - r) * (4.0 * 127.75);
+  precise float hardness = (1.0 - r) * (HARDNESS_PER_SHININESS * MAX_SHININESS);
   precise float q = 2.0 / (hardness + 2.0);
   return sqrt(q);
 }
 
-const float kMaxConeTan = 16.0;
-
 float look_cone_tan(float alpha) {
   precise float d = 1.0 - alpha * alpha;
   precise float t = 2.0 * alpha;
-  precise float dm = d * kMaxConeTan;
-  return dm > t ? t / d : kMaxConeTan;
+  precise float dm = d * MAX_CONE_TAN;
+  return dm > t ? t / d : MAX_CONE_TAN;
 }

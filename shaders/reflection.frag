@@ -7,6 +7,7 @@
 // counts as 1, smooth), as the CPU backend does.
 #include "common.glsl"
 #include "fragment.glsl"
+#include "look_common.glsl"
 
 uniform sampler2D u_color;     // reflection colour
 uniform sampler2D u_blurred;   // its blur
@@ -20,7 +21,7 @@ layout(location = 0) out vec4 out_color;
 void main() {
   ivec2 px = pixel_coord();
   vec4 s = texelFetch(u_specular, px, 0);
-  precise float amount = (s.r + s.g + s.b) / 3.0;
+  precise float amount = specular_amount(s);
   if (!(amount > 0.0) || !finite_f(amount)) {
     out_color = vec4(0.0);
     return;
@@ -28,7 +29,7 @@ void main() {
   vec4 c = texelFetch(u_color, px, 0);
   vec4 m = c;
   if (u_has_blurred) {
-    float roughness = 1.0 - clamp01(finite_f(s.a) ? s.a : 1.0);
+    float roughness = look_roughness(s);
     vec4 b = texelFetch(u_blurred, px, 0);
     precise vec4 mixed = c * (1.0 - roughness) + b * roughness;
     m = mixed;

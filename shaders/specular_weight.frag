@@ -40,7 +40,7 @@ void main() {
   out_color = vec4(0.0);
   vec4 p = texelFetch(u_position, px, 0);
   vec4 s = texelFetch(u_specular, px, 0);
-  if (!(p.w > 0.0 && finite_v4(p)) || !look_reflective(s)) return;
+  if (!texel_seen(p) || !is_reflective(s)) return;
   vec3 n = texelFetch(u_normal, px, 0).xyz;
   if (!finite_v3(n)) return;
   precise float nn = dot3(n, n);

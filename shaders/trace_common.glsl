@@ -1,5 +1,5 @@
 // What both marches share: the G-buffer lookups, the projection and the
-// near-plane clipping of native/src/cpu/march.cpp, written in the same order.
+// near-plane clipping of native/src/cpu/ray.cpp, written in the same order.
 // Needs common.glsl.
 
 uniform sampler2D u_position;  // RGBA32F, read with texelFetch only
@@ -40,11 +40,7 @@ double near_value(dvec3 v) {
   return r;
 }
 
-// A position texel counts as seen when w > 0 and every channel is finite
-// (non-finite values are data meaning "nothing seen", as on the CPU).
-bool texel_seen(vec4 p) { return p.w > 0.0 && finite_v4(p); }
-
-// SPEC fix 3: the nearest texel at floor(uv * size); off the image or on an
+// Fix 3 (docs/conventions.md): the nearest texel at floor(uv * size); off the image or on an
 // unseen texel is a miss, and a miss reads as (0, 0, 0, 0).
 bool fetch_position(vec2 uv, out vec4 p) {
   precise float fx = floor(uv.x * u_size.x);
@@ -60,15 +56,9 @@ bool fetch_position(vec2 uv, out vec4 p) {
   return false;
 }
 
-// The specular gate of the trace: the seed returns early where the specular
-// amount is not positive (glint::is_reflective).
-bool is_reflective(vec4 s) {
-  precise float amount = (s.r + s.g + s.b) / 3.0;
-  return amount > 0.0 && finite_f(amount);
-}
-
-// SPEC fix 4: unseen pixels, zero or non-finite normals and a position at the
+// Fix 4 (docs/conventions.md): unseen pixels, zero or non-finite normals and a position at the
 // eye report 0.
+// The specular gate: the seed returns early where a pixel does not reflect.
 bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
   if (u_has_specular && !is_reflective(texelFetch(u_specular, px, 0))) return false;
   vec4 p = texelFetch(u_position, px, 0);
@@ -76,7 +66,7 @@ bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
   vec3 n = texelFetch(u_normal, px, 0).xyz;
   if (!finite_v3(n) || dot3(n, n) == 0.0) return false;
   from = p.xyz;
-  // The incident direction (see march.cpp read_origin): the view ray of the
+  // The incident direction (see read_origin() in native/src/cpu/ray.cpp): the view ray of the
   // camera, which for an orthographic one is the same for every pixel.
   if (u_eye_kind == 0) {
     if (dot3(from, from) == 0.0) return false;
@@ -92,7 +82,7 @@ bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
   return finite_v3(unit_from) && finite_v3(normal);
 }
 
-// SPEC fix 2: the ray length, shortened so the end stays in front of the near
+// Fix 2 (docs/conventions.md): the ray length, shortened so the end stays in front of the near
 // plane (clip z >= -w, w > 0). The crossing is solved in double; the float end
 // point then lands on the plane give or take a rounding step, so it is checked
 // and, while behind, pulled back by a shrink that starts at two float steps

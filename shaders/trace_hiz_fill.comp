@@ -27,10 +27,7 @@ layout(rgba32f, binding = 2) uniform readonly image2D u_normal_img;
 layout(rgba32f, binding = 3) uniform readonly image2D u_specular_img;  // read when u_has_specular
 layout(rgba32f, binding = 4) uniform readonly image2D u_coarse;  // (w + 1) / 2 x (h + 1) / 2: pixel (2x, 2y)'s result
 
-// kReuseCos, kReuseDepth, kReusePixels in march_hiz.cpp.
-const float REUSE_COS = 0.98;
-const float REUSE_DEPTH = 0.02;
-const float REUSE_PIXELS = 3.0;
+// REUSE_COS, REUSE_DEPTH, REUSE_PIXELS: schema.glsl (glint::hiz::kReuse*).
 
 // A traced pixel as its neighbours see it.
 struct Traced {

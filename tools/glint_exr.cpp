@@ -24,11 +24,14 @@
 #include "glint/pipeline.h"
 #include "glint/png.h"
 #include "glint/presets.h"
+#include "glint/schema.h"
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// The usage text is in three parts: the options of the pipeline between
+// them come from glint/schema.h (print_pipeline_options()).
 const char* const kUsage = R"(usage: glint-exr [options] INPUT.exr [OUTPUT.exr]
 
 Runs Glint's screen-space reflections on the position, normal, specular and
@@ -54,25 +57,9 @@ Projection (default: the input's glintProjection header attribute):
                                       clip = P * (x, y, z, 1)
   --perspective FOV_Y_DEG,NEAR,FAR    aspect = image width / height
   --orthographic HALF_HEIGHT,NEAR,FAR half width = half height * aspect
+)";
 
-Pipeline:
-  --max-distance F        longest reflected ray, view units      [15]
-  --resolution F          coarse-pass share of pixels, 0..1      [0.3]
-  --steps N               iteration budget; per march, below      [10]
-  --thickness F           hit depth tolerance, view units        [0.5]
-  --march NAME            one of the marches below               [seed]
-  --blocked miss|occluder what a blocked hiz ray shows: nothing, or what
-                          hides its hit (below)                  [miss]
-  --preset NAME           a preset's trace options (below); flags after it override
-  --weighting physical|seed  F0 * A + B split-sum, or mean F0  [physical]
-  --blur cone|box         ray length x GGX cone, or a fixed box  [cone]
-  --blur-size N           box half-width in taps, 0 = no blur    [8]
-  --blur-separation F     pixels between taps, >= 1              [1]
-  --combine over|seed                                            [over]
-  The seed's look: --weighting seed --blur box --combine seed.
-  --backend cpu|gl|auto                                          [cpu]
-  --threads N             CPU threads, 0 = all                   [0]
-
+const char* const kUsageOutput = R"(
 Output:
   --png FILE              8-bit sRGB PNG of the combined layer
   --compression METHOD    zip|zips|piz|rle|none                  [zip]
@@ -82,6 +69,57 @@ OUTPUT.exr may be left out when --png is given. Per-stage timings are printed
 to stdout. Example:
   glint-exr --perspective 50,0.1,100 --png out.png gbuffer.exr out.exr
 )";
+
+// "  --flag METAVAR" padded to the doc column, the doc wrapped at 79 columns.
+void print_option(const std::string& flag, const std::string& doc) {
+  constexpr size_t kColumn = 26, kWidth = 79;
+  std::string line = "  " + flag;
+  line += line.size() < kColumn ? std::string(kColumn - line.size(), ' ') : "\n" + std::string(kColumn, ' ');
+  size_t used = kColumn;
+  std::istringstream words(doc);
+  std::string word;
+  bool first = true;
+  while (words >> word) {
+    if (!first && used + 1 + word.size() > kWidth) {
+      line += "\n" + std::string(kColumn, ' ');
+      used = kColumn;
+      first = true;
+    }
+    if (!first) {
+      line += ' ';
+      ++used;
+    }
+    line += word;
+    used += word.size();
+    first = false;
+  }
+  std::printf("%s\n", line.c_str());
+}
+
+// Every option of the pipeline the command line takes, from the schema:
+// meaning, unit, limits or names, default.
+void print_pipeline_options() {
+  namespace s = glint::schema;
+  std::printf("\nPipeline (defaults in brackets):\n");
+  for (const s::Option* o : s::kOptions) {
+    if (o == &s::memory_limit_mb) continue;  // no flag: the environment's limit applies
+    std::string flag = std::string("--") + o->name;
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    std::string doc = o->doc;
+    if (o->type == s::Type::Name) {
+      std::string names;
+      for (int k = 0; o->choices && o->choices[k]; ++k) names += (k ? "|" : "") + std::string(o->choices[k]);
+      flag += names.empty() ? " NAME" : " " + names;
+    } else {
+      flag += o->type == s::Type::Int ? " N" : " F";
+      doc += std::string("; ") + (*o->unit ? std::string(o->unit) + " " : "") + "in [" +
+             s::number_text(o->min, o->type) + ", " + s::number_text(o->max, o->type) + "]";
+    }
+    print_option(flag, doc + " [" + s::initial_text(*o) + "]");
+  }
+  print_option("--preset NAME", "a preset's trace options (below); flags after it override them");
+  std::printf("  The seed's look: --weighting seed --blur box --combine seed.\n");
+}
 
 // The marches and presets, and what each option means, from the core's tables.
 void print_marches() {
@@ -117,7 +155,7 @@ struct Args {
   std::optional<glint::Mat4> projection;  // from --projection
   std::optional<std::vector<double>> perspective, orthographic;
   glint::PipelineOptions opt;
-  std::string backend = "cpu";
+  std::string backend = glint::schema::backend.initial_name;
   std::string compression = "zip";
 };
 
@@ -227,22 +265,19 @@ Args parse_args(int argc, char** argv, bool& help) {
         throw UsageError{flag + " " + v + ": that march needs the scene's triangles, which an EXR does not hold"};
     } else if (flag == "--blur-size") a.opt.blur.size = parse_int(flag, next());
     else if (flag == "--blur-separation") a.opt.blur.separation = static_cast<float>(parse_double(flag, next()));
-    else if (flag == "--weighting" || flag == "--blur" || flag == "--blocked") {
+    else if (flag == "--weighting" || flag == "--blur" || flag == "--blocked" || flag == "--combine") {
       const std::string v = next();
       try {
         if (flag == "--weighting") a.opt.weighting = glint::parse_weighting(v);
         else if (flag == "--blur") a.opt.blur_mode = glint::parse_blur_mode(v);
+        else if (flag == "--combine") a.opt.combine = glint::parse_combine(v);
         else a.opt.trace.blocked = glint::parse_blocked(v);
       } catch (const glint::InvalidArgument& e) {
         throw UsageError{flag + ": " + std::string(e.what()).substr(std::string(e.what()).find(": ") + 2)};
       }
-    } else if (flag == "--combine") {
-      const std::string v = next();
-      if (v != "over" && v != "seed") throw UsageError{flag + ": expected over or seed, got \"" + v + "\""};
-      a.opt.combine = glint::parse_combine(v);
     } else if (flag == "--backend") {
       a.backend = next();
-      if (a.backend != "cpu" && a.backend != "gl" && a.backend != "auto")
+      if (glint::schema::backend.choice_index(a.backend) < 0)
         throw UsageError{flag + ": expected cpu, gl or auto, got \"" + a.backend + "\""};
     } else if (flag == "--threads") a.opt.threads = parse_int(flag, next());
     else if (flag == "--png") a.png = next();
@@ -418,6 +453,8 @@ int main(int argc, char** argv) {
     args = parse_args(argc, argv, help);
     if (help) {
       std::fputs(kUsage, stdout);
+      print_pipeline_options();
+      std::fputs(kUsageOutput, stdout);
       print_marches();
       return 0;
     }

@@ -125,7 +125,10 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
         description="Composite screen-space reflections into every rendered frame")
     # Stored by name: the enums below list whatever the core's tables hold.
     preset_name: StringProperty(default=sl.DEFAULT_PRESET, options={"HIDDEN"})
-    march_name: StringProperty(default="SEED", options={"HIDDEN"})
+    # The core's trace default. Rendering follows preset_name unless it is
+    # Custom; a default of the default preset's march would change what files
+    # saved with Custom and an untouched March render.
+    march_name: StringProperty(default=sl.DEFAULT_MARCH, options={"HIDDEN"})
     preset: EnumProperty(name="Quality", items=_preset_items, get=_get_preset, set=_set_preset,
                          update=_on_preset,
                          description="Quality preset, measured in docs/marches.md: sets the march, "

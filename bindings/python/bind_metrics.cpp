@@ -48,7 +48,7 @@ void bind_metrics(pyb::module_& m) {
       },
       "uv"_a, "exact"_a, pyb::kw_only(), "color"_a = pyb::none(), "specular"_a = pyb::none(),
       "tolerance_px"_a = 1.5f,
-      "Accuracy of a reflected-uv buffer against march='exact' (SPEC): precision and recall\n"
+      "Accuracy of a reflected-uv buffer against march='exact' (docs/conventions.md): precision and recall\n"
       "within tolerance_px, median/p95/max pixel error where both report, false reflections,\n"
       "and with color the mean absolute error of the reflection colour over reflective\n"
       "pixels (specular amount > 0 when specular is given). 'disagreement' is an image:\n"

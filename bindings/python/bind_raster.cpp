@@ -15,6 +15,7 @@
 #include "glint/errors.h"
 #include "glint/memory.h"
 #include "glint/raster.h"
+#include "glint/schema.h"
 
 namespace glint::py {
 
@@ -173,11 +174,12 @@ void bind_raster(pyb::module_& m) {
   m.def("rasterize", &py_rasterize, "positions"_a, "normals"_a, "material_index"_a, "materials"_a,
         "projection"_a, "width"_a, "height"_a, pyb::kw_only(), "uvs"_a = pyb::none(),
         "tangents"_a = pyb::none(), "material_normal_map"_a = pyb::none(),
-        "normal_maps"_a = pyb::tuple(), "back_layer"_a = false, "backend"_a = "cpu", "threads"_a = 0,
+        "normal_maps"_a = pyb::tuple(), "back_layer"_a = false, "backend"_a = schema::backend.initial_name,
+        "threads"_a = schema::threads.initial_int(),
         "memory_limit_mb"_a = 0.0,
         "G-buffers from view-space triangles (Blender camera space, -Z forward).\n"
         "positions, normals: float32 (T, 3, 3); material_index: int32 (T,);\n"
-        "materials: (M, 4) = (specular r, g, b, shininess 0..127.75);\n"
+        "materials: (M, 4) = (specular r, g, b, shininess 0..MAX_SHININESS);\n"
         "uvs (T, 3, 2), tangents (T, 3, 4) (xyz + bitangent sign), material_normal_map int32 (M,)\n"
         "(-1 = none) and normal_maps (float32 (h, w, 3|4) images) for tangent-space normal maps.\n"
         "Returns dict(position, normal, specular) of float32 (height, width, 4), plus\n"

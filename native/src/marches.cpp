@@ -1,58 +1,18 @@
-// The table of marches (glint/marches.h) and the input checks every stage
-// passes through, whichever backend runs it.
+// The table of marches (glint/marches.h).
 #include "glint/marches.h"
 
 #include <string>
 
-#include "cpu/trace.h"
 #include "glint/errors.h"
-#include "glint/stages.h"
 
 namespace glint {
 
 const std::vector<MarchInfo>& march_table() {
-  // Adding a march: a row here, its CPU function in cpu/trace.h, its GL
-  // program in shaders/ (or nullptr), and docs/marches.md.
-  // Scratch: seed and linear keep one float view distance per texel; the hiz
-  // pyramid is 2 floats per cell, 4/3 cells per texel, rounded up; the exact
-  // march copies each triangle into Embree (48 bytes), keeps its plane (32)
-  // and Embree's BVH takes about 4 node bytes per triangle more (robust, medium).
-  static const std::vector<MarchInfo> table = {
-      {March::Seed, "seed",
-       "The seed chapter's two-pass march: a coarse pass over a share of the pixels, then bisection",
-       {{"max_distance", "length of the reflected ray, view units; also fades the reflection"},
-        {"resolution", "share of the pixels the ray crosses on screen that the coarse pass visits"},
-        {"steps", "bisection iterations after the first coarse hit"},
-        {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}},
-       false, 4, 0, false, &cpu::trace_seed, "trace_seed.frag"},
-      {March::Linear, "linear",
-       "The book's older march: fixed view-space steps, stepping back and approaching after a hit",
-       {{"max_distance", "length of the reflected ray, view units"},
-        {"steps", "view-space steps along the ray (max_distance / steps each)"},
-        {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}},
-       false, 4, 0, false, &cpu::trace_linear, "trace_linear.frag"},
-      {March::Hiz, "hiz",
-       "Min/max depth pyramid walk: skips empty space cell by cell, hits where the ray's depth span "
-       "meets a surface, never skips a depth interval",
-       {{"max_distance", "length of the reflected ray, view units"},
-        {"resolution",
-         "0.5 or below: rays of every other pixel of every other row first, and each other pixel's "
-         "only where the traced pixels around it disagree (else it takes their hit, or their miss); "
-         "above 0.5: every pixel's ray"},
-        {"steps", "walk budget per ray, in cells per pyramid level (steps x levels cells at most)"},
-        {"thickness",
-         "how far behind a surface is solid (a ray there is blocked), view units, where no "
-         "back_position gives the real depth"},
-        {"blocked",
-         "what a blocked ray reports: 'miss' nothing; 'occluder' the uv of what hides its hit, "
-         "(u, v, weight, 0): the colour stages show it, the 4th channel says no hit was found"}},
-       false, 28, 0, true, &cpu::trace_hiz, "trace_hiz.frag"},
-      {March::Exact, "exact",
-       "The ground truth: each pixel's mirror ray traced against the scene's triangles (Embree), "
-       "reported where the camera sees the hit; runs on the CPU whatever the backend",
-       {{"max_distance", "length of the reflected ray, view units: the first hit within it counts"}},
-       true, 0, 320, false, &cpu::trace_exact, nullptr},
-  };
+  static const std::vector<MarchInfo> table = [] {
+    std::vector<MarchInfo> rows = registered_marches();
+    for (size_t k = 0; k < rows.size(); ++k) rows[k].id = static_cast<March>(k);
+    return rows;
+  }();
   return table;
 }
 
@@ -75,55 +35,6 @@ const MarchInfo& march_info(const std::string& name) {
   for (const MarchInfo& info : march_table())
     if (name == info.name) return info;
   throw InvalidArgument("march", "expected one of " + march_names() + ", got \"" + name + "\"");
-}
-
-void require_image(const Image& img, const char* name) {
-  if (img.width <= 0 || img.height <= 0)
-    throw InvalidArgument(name, "expected a non-empty image, got " + std::to_string(img.width) +
-                                    "x" + std::to_string(img.height));
-  if (img.width > kMaxImageSide || img.height > kMaxImageSide)
-    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
-                                    " pixels a side, got " + std::to_string(img.width) + "x" +
-                                    std::to_string(img.height));
-  if (img.data.size() != img.pixel_count() * 4)
-    throw InvalidArgument(name, "pixel storage does not match its size");
-}
-
-void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name) {
-  require_image(b, b_name);
-  if (a.width != b.width || a.height != b.height)
-    throw InvalidArgument(b_name, std::string("expected the size of ") + a_name + " (" +
-                                      std::to_string(a.width) + "x" + std::to_string(a.height) +
-                                      "), got " + std::to_string(b.width) + "x" +
-                                      std::to_string(b.height));
-}
-
-void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
-  require_image(in.position, "position");
-  require_same_size(in.position, "position", in.normal, "normal");
-  if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
-  if (in.back_position)
-    require_same_size(in.position, "position", *in.back_position, "back_position");
-  validate(opt);
-  validate_projection(in.projection);
-  const MarchInfo& info = march_info(opt.march);
-  if (info.needs_mesh && !in.mesh)
-    throw InvalidArgument("mesh", std::string("march \"") + info.name +
-                                      "\" traces the scene's triangles: pass mesh=(vertices, triangles)");
-}
-
-void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
-                                    const Mat4& projection) {
-  require_image(position, "position");
-  require_same_size(position, "position", normal, "normal");
-  require_same_size(position, "position", specular, "specular");
-  validate_projection(projection);
-}
-
-void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular) {
-  require_image(color, "reflection_color");
-  require_same_size(color, "reflection_color", uv, "uv");
-  require_same_size(color, "reflection_color", specular, "specular");
 }
 
 }  // namespace glint

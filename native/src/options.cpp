@@ -22,25 +22,39 @@ void require_range(const char* name, double v, double lo, double hi) {
   }
 }
 
-}  // namespace
-
-void validate(const TraceOptions& o) {
-  require_range("max_distance", o.max_distance, 0.0, kMaxDistanceLimit);
-  require_range("resolution", o.resolution, 0.0, 1.0);
-  require_range("thickness", o.thickness, 0.0, 1e30);
-  if (o.steps < 0 || o.steps > kMaxSteps) {
-    throw InvalidArgument("steps", "expected an integer in [0, " + std::to_string(kMaxSteps) +
-                                       "], got " + std::to_string(o.steps));
+void require_count(const char* name, int v, double lo, double hi) {
+  if (v < lo || v > hi) {
+    throw InvalidArgument(name, "expected an integer in [" + std::to_string(static_cast<long long>(lo)) + ", " +
+                                    std::to_string(static_cast<long long>(hi)) + "], got " + std::to_string(v));
   }
 }
 
+// The index of `name` among a named option's choices; the message lists them
+// as `"a" or "b"`.
+int parse_choice(const schema::Option& o, const std::string& name) {
+  const int k = o.choice_index(name);
+  if (k >= 0) return k;
+  std::string expected;
+  for (int i = 0; o.choices[i]; ++i)
+    expected += std::string(i == 0 ? "" : o.choices[i + 1] ? ", " : " or ") + "\"" + o.choices[i] + "\"";
+  throw InvalidArgument(o.name, "expected " + expected + ", got \"" + name + "\"");
+}
+
+const char* choice_name(const schema::Option& o, int k) { return o.choices[k]; }
+
+}  // namespace
+
+void validate(const TraceOptions& o) {
+  require_range(schema::max_distance.name, o.max_distance, schema::max_distance.min, schema::max_distance.max);
+  require_range(schema::resolution.name, o.resolution, schema::resolution.min, schema::resolution.max);
+  require_range(schema::thickness.name, o.thickness, schema::thickness.min, schema::thickness.max);
+  require_count(schema::steps.name, o.steps, schema::steps.min, schema::steps.max);
+}
+
 void validate(const BlurOptions& o) {
-  if (o.size < 0 || o.size > kMaxBlurSize) {
-    throw InvalidArgument("blur_size", "expected an integer in [0, " +
-                                           std::to_string(kMaxBlurSize) + "], got " +
-                                           std::to_string(o.size));
-  }
-  require_range("blur_separation", o.separation, 1.0, kMaxBlurSeparation);
+  require_count(schema::blur_size.name, o.size, schema::blur_size.min, schema::blur_size.max);
+  require_range(schema::blur_separation.name, o.separation, schema::blur_separation.min,
+                schema::blur_separation.max);
 }
 
 void validate(const PipelineOptions& o) {
@@ -57,36 +71,18 @@ void validate_threads(int threads) {
   }
 }
 
-Combine parse_combine(const std::string& name) {
-  if (name == "over") return Combine::Over;
-  if (name == "seed") return Combine::Seed;
-  throw InvalidArgument("combine", "expected \"over\" or \"seed\", got \"" + name + "\"");
-}
-
-const char* to_string(Combine c) { return c == Combine::Over ? "over" : "seed"; }
+Combine parse_combine(const std::string& name) { return static_cast<Combine>(parse_choice(schema::combine, name)); }
+const char* to_string(Combine c) { return choice_name(schema::combine, static_cast<int>(c)); }
 
 Weighting parse_weighting(const std::string& name) {
-  if (name == "physical") return Weighting::Physical;
-  if (name == "seed") return Weighting::Seed;
-  throw InvalidArgument("weighting", "expected \"physical\" or \"seed\", got \"" + name + "\"");
+  return static_cast<Weighting>(parse_choice(schema::weighting, name));
 }
+const char* to_string(Weighting w) { return choice_name(schema::weighting, static_cast<int>(w)); }
 
-const char* to_string(Weighting w) { return w == Weighting::Physical ? "physical" : "seed"; }
+BlurMode parse_blur_mode(const std::string& name) { return static_cast<BlurMode>(parse_choice(schema::blur, name)); }
+const char* to_string(BlurMode b) { return choice_name(schema::blur, static_cast<int>(b)); }
 
-BlurMode parse_blur_mode(const std::string& name) {
-  if (name == "cone") return BlurMode::Cone;
-  if (name == "box") return BlurMode::Box;
-  throw InvalidArgument("blur", "expected \"cone\" or \"box\", got \"" + name + "\"");
-}
-
-const char* to_string(BlurMode b) { return b == BlurMode::Cone ? "cone" : "box"; }
-
-Blocked parse_blocked(const std::string& name) {
-  if (name == "miss") return Blocked::Miss;
-  if (name == "occluder") return Blocked::Occluder;
-  throw InvalidArgument("blocked", "expected \"miss\" or \"occluder\", got \"" + name + "\"");
-}
-
-const char* to_string(Blocked b) { return b == Blocked::Miss ? "miss" : "occluder"; }
+Blocked parse_blocked(const std::string& name) { return static_cast<Blocked>(parse_choice(schema::blocked, name)); }
+const char* to_string(Blocked b) { return choice_name(schema::blocked, static_cast<int>(b)); }
 
 }  // namespace glint

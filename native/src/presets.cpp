@@ -8,40 +8,39 @@
 namespace glint {
 namespace {
 
-TraceOptions trace_of(March m, float max_distance, float resolution, int steps, float thickness) {
+// A preset sets the quality only; max_distance and thickness keep the
+// defaults (glint/schema.h): they describe the scene, not the quality, and a
+// user sets them for the scene's scale.
+TraceOptions trace_of(March m, float resolution, int steps) {
   TraceOptions o;
   o.march = m;
-  o.max_distance = max_distance;
   o.resolution = resolution;
   o.steps = steps;
-  o.thickness = thickness;
   return o;
 }
 
 }  // namespace
 
 const std::vector<Preset>& presets() {
-  // max_distance and thickness are the seed's defaults: they describe the
-  // scene, not the quality, and a user sets them for the scene's scale.
   static const std::vector<Preset> table = {
       {"draft",
        "Hi-Z walk, 5 cells per level, a quarter of the rays traced and reused where neighbours agree. "
        "1080p analytic scenes: recall 0.91-0.94, precision 0.999; ~0.2x the seed's CPU time "
        "(docs/marches.md)",
-       trace_of(March::Hiz, 15.0f, 0.3f, 5, 0.5f)},
+       trace_of(March::Hiz, 0.3f, 5)},
       {"balanced",
        "Hi-Z walk, 10 cells per level, a quarter of the rays traced and reused where neighbours agree. "
        "1080p analytic scenes: recall 0.98-0.99, precision 0.999; ~0.2x the seed's CPU time. Blender "
        "samples: precision 0.92-0.99 with the back layer (docs/presets.md)",
-       trace_of(March::Hiz, 15.0f, 0.3f, 10, 0.5f)},
+       trace_of(March::Hiz, 0.3f, 10)},
       {"high",
        "Hi-Z walk, 16 cells per level, every pixel's own ray: no ray runs out of budget and none is "
        "reused. About 1.6x balanced's CPU time, a third of the seed's (docs/marches.md)",
-       trace_of(March::Hiz, 15.0f, 1.0f, 16, 0.5f)},
+       trace_of(March::Hiz, 1.0f, 16)},
       {"exact",
        "Every mirror ray traced against the scene's triangles, on the CPU; needs mesh. Precision and "
        "recall 1 by definition; 0.2-0.5x the seed's time on the samples' few thousand triangles",
-       trace_of(March::Exact, 15.0f, 0.3f, 10, 0.5f)},
+       trace_of(March::Exact, 0.3f, 10)},
   };
   return table;
 }

@@ -172,11 +172,27 @@ TEST(GlShaders, LogLocationsAreMappedToFilesAndLines) {
   EXPECT_EQ(gl::map_shader_log("error: vec4(1.0) expected", "a.frag"), "error: vec4(1.0) expected\n");
 }
 
+// shaders/testing/, embedded into this test alone (native/tests/CMakeLists.txt).
+namespace glint::gl::test_shaders {
+const EmbeddedShader* find_embedded_shader(const std::string& name);
+const char* embedded_file_name(int number);
+}  // namespace glint::gl::test_shaders
+
+namespace {
+
+void compile_test_shader(Backend& backend, const std::string& entry) {
+  const gl::EmbeddedShader* s = gl::test_shaders::find_embedded_shader(entry);
+  ASSERT_NE(s, nullptr) << entry;
+  gl::compile_for_test(backend, entry, s->source, &gl::test_shaders::embedded_file_name);
+}
+
+}  // namespace
+
 TEST(GlShaders, CompileErrorNamesTheFileAndLineAfterAnInclude) {
   GLINT_REQUIRE_GL(gl);
   const int line = marked_line("testing/broken.frag");
   try {
-    gl::compile_for_test(*gl, "testing/broken.frag");
+    compile_test_shader(*gl, "testing/broken.frag");
     FAIL() << "the deliberately broken shader compiled";
   } catch (const Error& e) {
     const std::string msg = e.what();
@@ -190,7 +206,7 @@ TEST(GlShaders, CompileErrorInAnIncludedFileNamesThatFile) {
   GLINT_REQUIRE_GL(gl);
   const int line = marked_line("testing/broken_include.glsl");
   try {
-    gl::compile_for_test(*gl, "testing/broken_in_include.frag");
+    compile_test_shader(*gl, "testing/broken_in_include.frag");
     FAIL() << "the deliberately broken shader compiled";
   } catch (const Error& e) {
     const std::string msg = e.what();

@@ -160,3 +160,15 @@ def test_row_layout_is_rgb_then_shininess():
     s = m.SpecularSpec((0.1, 0.2, 0.3), 12.0)
     assert s.row() == (0.1, 0.2, 0.3, 12.0)
     assert s.amount == pytest.approx(0.2)
+
+
+def test_roughness_survives_the_round_trip_through_the_core(core):
+    """The add-on writes shininess from Blender's roughness; the core reads a GGX
+    alpha back from the specular buffer's alpha. Between the clamps (hardness 1..511,
+    roughness ~0.25..0.90) that alpha must be Blender's own, roughness squared."""
+    for r in [0.26 + k * (0.90 - 0.26) / 40 for k in range(41)]:
+        shininess = m.shininess_from_roughness(r)
+        alpha = core.ggx_alpha(core.shininess_to_alpha(shininess))
+        assert alpha == pytest.approx(r * r, rel=1e-5), r  # float32 in the core
+    # At or below ~0.25 the 511 clamp makes a mirror, on both sides.
+    assert core.ggx_alpha(core.shininess_to_alpha(m.shininess_from_roughness(0.2))) == 0.0

@@ -7,58 +7,76 @@ s = load_logic("settings")
 pr = load_logic("progress")
 
 
-# Stand-ins for the core's tables, shaped as glint_core returns them.
+# Made-up tables in the shape glint_core returns them, for the functions'
+# logic alone; the real tables are checked against the core further down.
 PRESETS = {
-    "draft": {"max_distance": 15.0, "resolution": 0.3, "steps": 5, "thickness": 0.5, "march": "hiz"},
-    "balanced": {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "hiz"},
+    "quick": {"max_distance": 15.0, "resolution": 0.3, "steps": 5, "thickness": 0.5, "march": "walk"},
+    "careful": {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "walk"},
 }
-DESCRIPTIONS = {"draft": "short walk", "balanced": "the knee"}
+DESCRIPTIONS = {"quick": "short walk", "careful": "the knee"}
 DETAILS = {
-    "seed": {"description": "two-pass", "options": {"steps": "bisection iterations"}, "needs_mesh": False,
-             "uses_back_position": False, "gl": True},
-    "hiz": {"description": "pyramid walk", "options": {"steps": "cells per level"}, "needs_mesh": False,
-            "uses_back_position": True, "gl": False},
+    "points": {"description": "two-pass", "options": {"steps": "bisection iterations"}, "needs_mesh": False,
+               "uses_back_position": False, "gl": True},
+    "walk": {"description": "pyramid walk", "options": {"steps": "cells per level"}, "needs_mesh": False,
+             "uses_back_position": True, "gl": False},
 }
 
 
 def test_parameter_defaults_are_the_seeds():
-    for key in ("max_distance", "resolution", "steps", "thickness"):
-        assert key in s.PARAMETERS
-    assert s.PARAMETERS["max_distance"][0] == 15.0 and s.PARAMETERS["thickness"][0] == 0.5
+    """The seed chapter's maxDistance 15, resolution 0.3, steps 10, thickness 0.5."""
+    defaults = {key: s.PARAMETERS[key][0] for key in ("max_distance", "resolution", "steps", "thickness")}
+    assert defaults == {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5}
 
 
-def test_enum_items_come_from_the_core_tables():
+def test_enum_items_come_from_the_tables():
     marches = s.march_items(DETAILS)
-    assert [i[0] for i in marches] == ["SEED", "HIZ"] and [i[3] for i in marches] == [0, 1]
+    assert [i[0] for i in marches] == ["POINTS", "WALK"] and [i[3] for i in marches] == [0, 1]
     assert "cells per level" in marches[1][2] and "Runs on the CPU" in marches[1][2]
+    assert "Runs on the CPU" not in marches[0][2]
     presets = s.preset_items(PRESETS, DESCRIPTIONS)
-    assert [i[0] for i in presets] == ["DRAFT", "BALANCED", "CUSTOM"]
+    assert [i[0] for i in presets] == ["QUICK", "CAREFUL", "CUSTOM"]
     assert "the knee" in presets[1][2] and "steps 10" in presets[1][2]
-    assert s.DEFAULT_PRESET == "BALANCED"
     # Without the core, the stored choice is still listed (and Custom).
     assert [i[0] for i in s.march_items({}, current="HIZ")] == ["HIZ"]
     assert [i[0] for i in s.preset_items({}, {}, current="HIGH")] == ["HIGH", "CUSTOM"]
 
 
+def test_the_menus_list_the_cores_tables(core):
+    details, presets = core.march_details(), core.presets()
+    marches = s.march_items(details)
+    assert [i[0] for i in marches] == [name.upper() for name in details]
+    for item, d in zip(marches, details.values()):
+        assert all(meaning in item[2] for meaning in d["options"].values())
+        assert ("Runs on the CPU" in item[2]) == (not d["gl"])
+    items = s.preset_items(presets, core.preset_descriptions())
+    assert [i[0] for i in items] == [name.upper() for name in presets] + [s.CUSTOM]
+    assert s.DEFAULT_PRESET in [i[0] for i in items]
+    for name, kw in presets.items():
+        v = s.preset_values(presets, name.upper())
+        assert v["march"] == kw["march"].upper() and v["steps"] == kw["steps"]
+        assert v["resolution"] == pytest.approx(kw["resolution"], abs=1e-6)
+        assert s.matching_preset(v, presets) == name.upper()
+
+
 def test_presets_set_quality_only():
-    v = s.preset_values(PRESETS, "BALANCED")
-    assert v == {"march": "HIZ", "resolution": 0.3, "steps": 10}
+    v = s.preset_values(PRESETS, "CAREFUL")
+    assert v == {"march": "WALK", "resolution": 0.3, "steps": 10}
     with pytest.raises(ValueError):
         s.preset_values(PRESETS, "ULTRA")
 
 
 def test_matching_preset():
-    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "HIZ"}, PRESETS) == "BALANCED"
-    assert s.matching_preset({"resolution": 0.3000001, "steps": 5, "march": "HIZ"}, PRESETS) == "DRAFT"
-    assert s.matching_preset({"resolution": 0.3, "steps": 11, "march": "HIZ"}, PRESETS) == "CUSTOM"
-    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "SEED"}, PRESETS) == "CUSTOM"
+    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "WALK"}, PRESETS) == "CAREFUL"
+    assert s.matching_preset({"resolution": 0.3000001, "steps": 5, "march": "WALK"}, PRESETS) == "QUICK"
+    assert s.matching_preset({"resolution": 0.3, "steps": 11, "march": "WALK"}, PRESETS) == "CUSTOM"
+    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "POINTS"}, PRESETS) == "CUSTOM"
 
 
 def test_a_named_preset_follows_the_core():
-    raw = {"max_distance": 7, "resolution": 1.0, "steps": 64, "thickness": 0.2, "march": "SEED"}
-    kw = s.trace_kwargs(dict(raw, preset="BALANCED"), PRESETS)
-    assert kw == {"max_distance": 7.0, "resolution": 0.3, "steps": 10, "thickness": 0.2, "march": "hiz"}
-    assert s.trace_kwargs(dict(raw, preset="CUSTOM"), PRESETS)["march"] == "seed"
+    raw = {"max_distance": 7, "resolution": 1.0, "steps": 64, "thickness": 0.2, "march": "POINTS"}
+    kw = s.trace_kwargs(dict(raw, preset="CAREFUL"), PRESETS)
+    assert kw == {"max_distance": 7.0, "resolution": 0.3, "steps": 10, "thickness": 0.2, "march": "walk"}
+    assert s.trace_kwargs(dict(raw, preset="CUSTOM"), PRESETS)["march"] == "points"
 
 
 def test_trace_kwargs():

@@ -1,7 +1,7 @@
 """Exact G-buffers of analytic scenes, and the exact mirror hit of every pixel.
 
 Everything here is float64 numpy and independent of glint_core: the tests use it
-as ground truth. Conventions are SPEC.md's:
+as ground truth. Conventions are docs/conventions.md's:
 
 * world space is Blender's (Z up); the camera's view space looks down -Z, +Y up;
 * images are [row, col, channel] with row 0 at the BOTTOM; pixel (i, j) of a

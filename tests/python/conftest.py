@@ -64,7 +64,7 @@ def write_png(path, image, lo=None, hi=None):
 
     Values map linearly from [lo, hi] (default: the finite min / max) to 0..255;
     NaN shows as magenta-ish 255/0/255 in RGB images, 0 otherwise. Row 0 of
-    the array is the BOTTOM row (SPEC.md), so rows are flipped for the file.
+    the array is the BOTTOM row (docs/conventions.md), so rows are flipped for the file.
     """
     a = np.asarray(image, dtype=np.float64)
     if a.ndim == 2:

@@ -19,12 +19,17 @@ import math
 
 import numpy as np
 
-CELL_NUDGE = 1.0 / 64.0
-PLANE_TOLERANCE = 1e-5
-BEHIND_SLACK = 1e-3
-FOOTPRINT_SPREAD = 0.5
-EDGE_FADE = 0.075   # share of the screen over which visibility fades at its edges
-UNCERTAIN = 0.5     # confidence of a hit located only to its texel, or on an outline
+from glint_tables import addon_schema
+
+# The method's constants are the core's (native/include/glint/schema.h, why
+# each is what it is); the rules that use them are written out below.
+_S = addon_schema()
+CELL_NUDGE = _S.CELL_NUDGE
+PLANE_TOLERANCE = _S.PLANE_TOLERANCE
+BEHIND_SLACK = _S.BEHIND_SLACK
+FOOTPRINT_SPREAD = _S.FOOTPRINT_SPREAD
+EDGE_FADE = _S.EDGE_FADE   # share of the screen over which visibility fades at its edges
+UNCERTAIN = _S.UNCERTAIN   # confidence of a hit located only to its texel, or on an outline
 
 
 def _seen(p):
@@ -291,7 +296,7 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
 # their own ray's result; any other pixel takes its traced neighbours' common
 # miss, or the mean of their hits when those lie within 3 pixels of each other,
 # provided that all of them lie on its own smooth surface; else its own ray's.
-REUSE_COS, REUSE_DEPTH, REUSE_PIXELS = 0.98, 0.02, 3.0
+REUSE_COS, REUSE_DEPTH, REUSE_PIXELS = _S.REUSE_COS, _S.REUSE_DEPTH, _S.REUSE_PIXELS
 
 
 def reuse_rays(position, normal, full):

@@ -2,7 +2,7 @@
 
 Written from the sources, not from the core: ``trace_seed`` follows the seed
 chapter (seeds/ssr-chapter.md, "Reflected UV Coordinates") with the four fixes of
-SPEC.md; ``trace_linear`` follows the book's older march (seeds/
+docs/conventions.md; ``trace_linear`` follows the book's older march (seeds/
 3d-game-shaders-for-beginners.md, "Reflected UVs"). One pixel at a time, Python
 floats (IEEE double), no shortcuts: the first pass really visits every
 k = 1 .. int(delta). Keep images small (tens of pixels a side).
@@ -76,7 +76,7 @@ class _Decisions:
 
 
 class _Buffers:
-    """The G-buffer as nested Python lists, and the texel read of SPEC fix 3."""
+    """The G-buffer as nested Python lists, and the texel read of fix 3 (docs/conventions.md)."""
 
     def __init__(self, position, normal, projection):
         position = np.asarray(position)
@@ -109,7 +109,7 @@ class _Buffers:
         return [P[r][0] * p[0] + P[r][1] * p[1] + P[r][2] * p[2] + P[r][3] for r in range(4)]
 
     def origin(self, x: int, y: int):
-        """(position, unit position, unit normal) of a pixel, or None (SPEC fix 4)."""
+        """(position, unit position, unit normal) of a pixel, or None (fix 4 of docs/conventions.md)."""
         p = self.pos[y][x]
         if not self.seen(p):
             return None
@@ -178,7 +178,7 @@ def _seed_pixel(b: _Buffers, x: int, y: int, max_distance, resolution, steps, th
     if pivot is None:
         return (0.0, 0.0, 0.0, 0.0)
 
-    # SPEC fix 2: cut the ray where it would cross the near plane. The test
+    # Fix 2 (docs/conventions.md): cut the ray where it would cross the near plane. The test
     # "clip z + clip w >= 0" is affine in the length along the ray.
     def near_margin(length):
         c = b.clip([from_[k] + pivot[k] * length for k in range(3)])
@@ -231,7 +231,7 @@ def _seed_pixel(b: _Buffers, x: int, y: int, max_distance, resolution, steps, th
         return ((1.0 - t) * vd0 / w0 + t * vd1 / w1) / ((1.0 - t) / w0 + t / w1)
 
     def fraction(f):
-        # SPEC fix 1: only the axis in use is divided by.
+        # Fix 1 (docs/conventions.md): only the axis in use is divided by.
         return (f[0] - start_frag[0]) / delta_x if use_x else (f[1] - start_frag[1]) / delta_y
 
     search0 = search1 = 0.0

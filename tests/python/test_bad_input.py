@@ -1,4 +1,4 @@
-"""SPEC.md "Bad input": a ValueError that names the argument, never a crash,
+"""docs/conventions.md, "Bad input": a ValueError that names the argument, never a crash,
 hang or silent wrong image; non-finite values INSIDE the buffers are data."""
 import numpy as np
 import pytest
@@ -175,7 +175,7 @@ def test_stage_functions_check_their_arguments():
 
 
 def test_accepted_variants_are_not_errors():
-    """What SPEC.md allows must work: float32 or float64 projection, normals
+    """What docs/conventions.md allows must work: float32 or float64 projection, normals
     with 3 or 4 channels, non-contiguous views."""
     a = good()
     ref = call_trace()
@@ -193,7 +193,7 @@ def test_accepted_variants_are_not_errors():
 
 def _nothing_seen(pos, mask):
     out = pos.copy()
-    out[mask] = 0.0  # w = 0: the SPEC's own "nothing seen"
+    out[mask] = 0.0  # w = 0: docs/conventions.md's "nothing seen"
     return out
 
 

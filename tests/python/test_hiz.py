@@ -137,7 +137,7 @@ def test_an_occluder_is_what_hides_the_hit():
         assert (hidden | late)[occluder].mean() >= bar
 
 
-EDGE_FADE = 0.075  # docs/marches.md: visibility fades over this share of the screen at its edges
+from reference_hiz import EDGE_FADE  # noqa: E402  (docs/marches.md: the fade at the screen's edges)
 
 
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
@@ -196,7 +196,7 @@ def test_a_hit_behind_the_thickness_is_not_reported_but_blocks():
     uv = glint_core.trace(*args, march="hiz", steps=64, thickness=0.5, back_position=back)
     rep = uv[..., 2] > 1e-3
     hidden = mh["hit"] & ~mh["visible"]
-    # Exact hits on hidden surfaces are, by SPEC, no reflection; the march may
+    # Exact hits on hidden surfaces are, by the accuracy contract (docs/conventions.md), no reflection; the march may
     # not claim more than a few of them (silhouette texels).
     assert (rep & hidden).sum() <= 0.05 * hidden.sum()
 

@@ -389,6 +389,10 @@ def test_bad_options_name_their_keyword():
 @pytest.mark.parametrize("kind", ["persp", "ortho"])
 @pytest.mark.parametrize("combine", ["seed", "over"])
 def test_seed_look_is_bit_for_bit_the_pipeline_before_it(kind, combine):
+    """A regression guard, not a check of correctness: the outputs in the .npz were
+    recorded from this same code before the physical look was added, so this only
+    says that weighting="seed", blur="box" still gives exactly what it gave then.
+    That the seed look is right is test_pipeline.py's (formulas written out there)."""
     f = np.load(DATA / "seed_pipeline_before_weighting.npz")
     g = {k: f[f"{kind}_{k}"] for k in ("position", "normal", "specular", "color", "projection")}
     out = glint_core.pipeline(g["position"], g["normal"], g["specular"], g["color"], g["projection"],

@@ -1,6 +1,6 @@
 """glint_core.trace (float32 C++) against reference_seed.py (float64 Python loops).
 
-Both implement the same text (the seed chapter + SPEC.md's fixes, the book's
+Both implement the same text (the seed chapter + the fixes of docs/conventions.md, the book's
 linear march), so they must agree pixel for pixel: uv within 1e-3 and
 visibility within 1e-3 on >= 99% of the pixels of every scene and parameter
 set (see ``agreement`` for uv far off screen).
@@ -13,7 +13,7 @@ agrees with the reference on a pixel when it matches the nominal outcome or
 one of those. The seed's bisection converges onto texel edges by design (with
 resolution 1 its first probe lies exactly on one), so this is common.
 
-Seed rays that reach the near plane and are shortened there (SPEC fix 2) get
+Seed rays that reach the near plane and are shortened there (fix 2 of docs/conventions.md) get
 their own share and their own test: their end point sits on the plane, where
 float32 rounding decides which side it lands on. The plain share (nominal
 outcome only) is printed too.

@@ -194,7 +194,7 @@ def test_rays_towards_camera_find_floor_uncut():
 
 
 def test_rays_cut_at_near_plane_keep_their_far_part():
-    """SPEC fix 2: a ray that would cross the near plane is shortened so its
+    """Fix 2 (docs/conventions.md): a ray that would cross the near plane is shortened so its
     end stays in front, nothing more. Hits beyond half of the cut length must
     still be found (here: the floor, 55-60 % of the way to the near plane).
     An earlier core halved the ray whenever its float end point rounded to

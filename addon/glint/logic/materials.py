@@ -35,11 +35,15 @@ import math
 from dataclasses import dataclass
 from typing import Mapping, Optional, Sequence, Tuple
 
-MIN_HARDNESS = 1.0
-MAX_HARDNESS = 511.0
-# The book: "511 is exported as 127.75", i.e. shininess = hardness / 4.
-HARDNESS_TO_SHININESS = 0.25
-MAX_SHININESS = MAX_HARDNESS * HARDNESS_TO_SHININESS  # 127.75
+from . import schema
+
+# The book: "511 is exported as 127.75", i.e. shininess = hardness / 4. The
+# numbers are the core's (schema.py), so that this mapping and the core's
+# inverse (glint::ggx_alpha_of) cannot drift apart.
+MIN_HARDNESS = schema.MIN_HARDNESS
+MAX_SHININESS = schema.MAX_SHININESS
+HARDNESS_TO_SHININESS = 1.0 / schema.HARDNESS_PER_SHININESS
+MAX_HARDNESS = schema.HARDNESS_PER_SHININESS * schema.MAX_SHININESS  # 511
 
 # Blender 3.x Principled BSDF: dielectric F0 = 0.08 * Specular (0.5 -> 0.04, IOR 1.5).
 PRINCIPLED_3X_F0_PER_SPECULAR = 0.08
@@ -59,7 +63,7 @@ class SpecularSpec:
     @property
     def amount(self) -> float:
         """How strongly the surface reflects: the core's mean of the colour."""
-        return (self.color[0] + self.color[1] + self.color[2]) / 3.0
+        return specular_amount(self.color)
 
     @property
     def alpha(self) -> float:
@@ -71,6 +75,19 @@ class SpecularSpec:
 
 
 NO_SPECULAR = SpecularSpec((0.0, 0.0, 0.0), 0.0)
+
+
+def specular_amount(rgb: Sequence[float]) -> float:
+    """The seed's specular amount of a specular colour (r, g, b[, a]): the mean of
+    the rgb (glint::specular_amount)."""
+    return (rgb[0] + rgb[1] + rgb[2]) / 3.0
+
+
+def is_reflective(rgb: Sequence[float]) -> bool:
+    """Whether a specular colour reflects at all: a positive, finite amount
+    (glint::is_reflective; the core skips every other pixel)."""
+    amount = specular_amount(rgb)
+    return math.isfinite(amount) and amount > 0.0
 
 
 def _clamp(v: float, lo: float, hi: float) -> float:

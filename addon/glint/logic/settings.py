@@ -1,9 +1,10 @@
 """The pipeline's parameters: limits, quality presets, and the keyword set the core takes.
 
-The limits mirror ``native/include/glint/options.h`` so that the panel never
-offers a value the core rejects; the presets (the core's) only touch the
-parameters that trade quality for time, never the scene-scale ones (max
-distance, thickness).
+Defaults and limits are the core's (``schema.py``, generated from
+``native/include/glint/schema.h``), so that the panel never offers a value the
+core rejects; only the panel's soft range and tooltip are chosen here. The
+presets (the core's) only touch the parameters that trade quality for time,
+never the scene-scale ones (max distance, thickness).
 """
 from __future__ import annotations
 
@@ -11,16 +12,19 @@ import glob
 import sys
 from typing import Callable, Dict, List, Mapping, Tuple, TypeVar
 
+from . import schema
+
+# The panel's own part of each parameter: (soft_min, soft_max, tooltip).
+_PANEL = {
+    "max_distance": (0.1, 100.0, "Longest reflected ray, in scene units (the seed's maxDistance)"),
+    "resolution": (0.0, 1.0, "Share of the on-screen pixels the coarse pass visits (the seed's resolution)"),
+    "steps": (0, 64, "Iteration budget; what it counts for each march is in the March tooltip"),
+    "thickness": (0.01, 10.0, "How deep surfaces are behind their front, in scene units (per march: March tooltip)"),
+}
 # name: (default, min, max, soft_min, soft_max, description)
 PARAMETERS = {
-    "max_distance": (15.0, 1e-4, 1e6, 0.1, 100.0,
-                     "Longest reflected ray, in scene units (the seed's maxDistance)"),
-    "resolution": (0.3, 0.0, 1.0, 0.0, 1.0,
-                   "Share of the on-screen pixels the coarse pass visits (the seed's resolution)"),
-    "steps": (10, 0, 1000, 0, 64,
-              "Iteration budget; what it counts for each march is in the March tooltip"),
-    "thickness": (0.5, 1e-5, 1e6, 0.01, 10.0,
-                  "How deep surfaces are behind their front, in scene units (per march: March tooltip)"),
+    name: (schema.OPTIONS[name]["default"], schema.OPTIONS[name]["min"], schema.OPTIONS[name]["max"]) + panel
+    for name, panel in _PANEL.items()
 }
 
 BACKENDS = (
@@ -34,13 +38,16 @@ BACKENDS = (
 # the functions below turn those tables into Blender enum items and settings,
 # and take them as arguments so that they are tested without the module.
 CUSTOM = "CUSTOM"
-DEFAULT_PRESET = "BALANCED"  # SPEC.md names it; its values are whatever the core says
+DEFAULT_PRESET = schema.DEFAULT_PRESET.upper()  # its values are whatever the core says
 # What a preset sets; max_distance and thickness describe the scene, not the quality.
 QUALITY_KEYS = ("march", "resolution", "steps")
 MISSING = "glint_core is not loaded, so its marches and presets cannot be listed"
 
 
-def march_items(details: Mapping[str, Mapping], current: str = "SEED") -> List[Tuple[str, str, str, int]]:
+DEFAULT_MARCH = schema.OPTIONS["march"]["default"].upper()  # the core's trace default
+
+
+def march_items(details: Mapping[str, Mapping], current: str = DEFAULT_MARCH) -> List[Tuple[str, str, str, int]]:
     """Enum items (identifier, label, tooltip, number) for the core's marches.
     Tooltips say what each option means for that march. Without the core, only
     the stored value is listed, so a file keeps its choice."""

@@ -1,8 +1,9 @@
 // The table of marches: every way Glint can turn a G-buffer into a
 // reflected-uv buffer, in one place. The bindings, the command-line tool, the
 // add-on (through glint_core.marches()), the tests and the sweeps all read
-// it; an unknown name is an error everywhere. docs/marches.md says how to add
-// a row.
+// it; an unknown name is an error everywhere. Each march is a folder of
+// native/marches/ whose march.cpp returns its row, registered by one line of
+// native/marches/CMakeLists.txt; docs/marches.md shows one added.
 #pragma once
 #include <string>
 #include <vector>
@@ -24,24 +25,29 @@ struct MarchKnob {
 using CpuTraceFn = Image (*)(const TraceInputs& in, const TraceOptions& opt, int threads);
 
 struct MarchInfo {
-  March id;
-  const char* name;         // the `march=` keyword value
-  const char* description;  // one line, for help texts and tooltips
-  std::vector<MarchKnob> knobs;  // the options it reads; the others are ignored
-  bool needs_mesh;          // reads TraceInputs::mesh (the scene's triangles)
+  // Its position in the registration list (the built-in ones have an
+  // enumerator of that value); set by the registry, not by the row.
+  March id = March::Seed;
+  const char* name = nullptr;         // the `march=` keyword value
+  const char* description = nullptr;  // one line, for help texts and tooltips
+  std::vector<MarchKnob> knobs;       // the options it reads; the others are ignored
+  bool needs_mesh = false;            // reads TraceInputs::mesh (the scene's triangles)
   // What the CPU implementation allocates beside its output, for the memory
   // budget (glint/memory.h): bytes per pixel, and per triangle of the mesh.
-  unsigned scratch_per_pixel;
-  unsigned scratch_per_triangle;
-  bool uses_back_position;  // reads TraceInputs::back_position where given
-  CpuTraceFn cpu;           // the CPU implementation
-  // The GL backend's fragment program (a file in shaders/), or nullptr when
+  unsigned scratch_per_pixel = 0;
+  unsigned scratch_per_triangle = 0;
+  bool uses_back_position = false;  // reads TraceInputs::back_position where given
+  CpuTraceFn cpu = nullptr;         // the CPU implementation
+  // The GL backend's fragment program (embedded by name), or nullptr when
   // the march has no GPU form: backend="gl" then runs `cpu` and says so.
-  const char* gl_program;
+  const char* gl_program = nullptr;
 };
 
-// Every march, in the order help texts list them.
+// Every march, in the order help texts list them: the registration order.
 const std::vector<MarchInfo>& march_table();
+// The rows in registration order, as written (id unset): generated from
+// native/marches/CMakeLists.txt. march_table() is the one to read.
+std::vector<MarchInfo> registered_marches();
 const MarchInfo& march_info(March m);
 // Throws InvalidArgument("march", ...) listing the known names.
 const MarchInfo& march_info(const std::string& name);
@@ -51,7 +57,7 @@ inline const char* to_string(March m) { return march_info(m).name; }
 // of every other row first, and each other pixel only where those traced
 // around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
 // backends decide by this.
-constexpr float kHizReuseResolution = 0.5f;
+constexpr float kHizReuseResolution = hiz::kReuseResolution;
 inline bool hiz_reuses_rays(const TraceOptions& o) {
   return o.march == March::Hiz && o.resolution <= kHizReuseResolution;
 }

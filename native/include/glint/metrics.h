@@ -1,5 +1,5 @@
 // How far a reflected-uv buffer is from the exact one (march="exact"): the
-// accuracy contract of SPEC, in one place for the bindings, the CLI, the
+// accuracy contract (docs/conventions.md), in one place for the bindings, the CLI, the
 // sweeps and the add-on's "Measure this scene".
 #pragma once
 #include "glint/image.h"

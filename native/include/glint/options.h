@@ -1,19 +1,28 @@
-// Every knob of the pipeline, with units and defaults, in one place.
-// Defaults are the seed chapter's (maxDistance 15, resolution 0.3, steps 10,
-// thickness 0.5) and the book's blur (size 8, separation 1: a 17x17 box).
+// The pipeline's options as C++ structs. Their defaults, limits, units and
+// names are glint/schema.h's: the seed chapter's trace (maxDistance 15,
+// resolution 0.3, steps 10, thickness 0.5) and the book's blur (size 8,
+// separation 1: a 17x17 box).
 #pragma once
 #include <string>
+
+#include "glint/schema.h"
 
 namespace glint {
 
 // The marches; what each is and which options it reads is in glint/marches.h.
-enum class March {
+// Its names are the table of marches'; schema::march names the default. A
+// march's value is its position in native/marches/CMakeLists.txt: these are
+// the ones the core itself refers to, and a march added later needs none.
+enum class March : int {
   Seed,    // the chapter's two-pass march: coarse pass + bisection
   Linear,  // the book's older single march: fixed view-space steps, step back on a hit
   Hiz,     // min/max depth pyramid walk with ray-span hits
   Exact,   // the mirror ray against the scene's triangles (Embree): the ground truth
 };
 
+// The named options' enums list their values in the order of the schema's
+// choices (schema::combine, weighting, blur, blocked), which parse_*() and
+// to_string() index.
 enum class Combine {
   Over,  // base * (1 - reflection.a) + reflection.rgb: visibility applied once (default)
   Seed,  // mix(base, reflection.rgb, reflection.a): the demo's base-combine, visibility twice
@@ -40,30 +49,31 @@ enum class Blocked {
              // hides the hit; the 4th channel, the hit's own visibility, says none was found
 };
 
+// Each field is the schema's option of the same name (units, limits and
+// meaning are there); test_options.cpp checks the march's default by name.
 struct TraceOptions {
-  float max_distance = 15.0f;  // view-space units (Blender units): longest reflected ray
-  float resolution = 0.3f;     // [0, 1]: share of the on-screen pixels the coarse pass visits
-  int steps = 10;              // an iteration budget; its meaning per march is in marches.h
-  float thickness = 0.5f;      // view-space units: how far behind a surface still counts as a hit
+  float max_distance = schema::max_distance.initial_float();
+  float resolution = schema::resolution.initial_float();
+  int steps = schema::steps.initial_int();  // its meaning per march is in marches.h
+  float thickness = schema::thickness.initial_float();
   March march = March::Seed;
-  Blocked blocked = Blocked::Miss;  // read by the hiz march only (marches.h)
-  // MiB this call (a trace, or the whole pipeline) may allocate; 0: the default,
-  // GLINT_MEMORY_LIMIT_MB or a share of physical memory (glint/memory.h).
-  double memory_limit_mb = 0.0;
+  Blocked blocked = static_cast<Blocked>(schema::blocked.initial_index());  // hiz only
+  // MiB this call (a trace, or the whole pipeline) may allocate (glint/memory.h).
+  double memory_limit_mb = schema::memory_limit_mb.initial;
 };
 
 struct BlurOptions {
-  int size = 8;             // half-width in taps: the box is (2 * size + 1)^2 taps; 0 = no blur
-  float separation = 1.0f;  // pixels between taps (>= 1, as the book clamps it)
+  int size = schema::blur_size.initial_int();                    // keyword blur_size
+  float separation = schema::blur_separation.initial_float();   // keyword blur_separation
 };
 
 struct PipelineOptions {
   TraceOptions trace;
   BlurOptions blur;
-  Combine combine = Combine::Over;
-  Weighting weighting = Weighting::Physical;
-  BlurMode blur_mode = BlurMode::Cone;  // Python keyword `blur`; BlurOptions apply to Box only
-  int threads = 0;  // CPU worker threads; 0 = one per hardware thread
+  Combine combine = static_cast<Combine>(schema::combine.initial_index());
+  Weighting weighting = static_cast<Weighting>(schema::weighting.initial_index());
+  BlurMode blur_mode = static_cast<BlurMode>(schema::blur.initial_index());  // keyword `blur`
+  int threads = schema::threads.initial_int();
 };
 
 // Throw InvalidArgument naming the offending field (Python keyword names).
@@ -86,11 +96,11 @@ Blocked parse_blocked(const std::string& name);  // "miss" | "occluder"
 const char* to_string(Blocked b);
 
 // Limits, public so that docs, bindings and tests quote the same numbers.
-constexpr int kMaxSteps = 1000000;
-constexpr double kMaxDistanceLimit = 1e12;  // past this float32 view positions carry no digits
-constexpr int kMaxBlurSize = 128;
-constexpr float kMaxBlurSeparation = 64.0f;
+constexpr int kMaxSteps = static_cast<int>(schema::steps.max);
+constexpr double kMaxDistanceLimit = schema::max_distance.max;
+constexpr int kMaxBlurSize = static_cast<int>(schema::blur_size.max);
+constexpr float kMaxBlurSeparation = static_cast<float>(schema::blur_separation.max);
 constexpr int kMaxImageSide = 32768;
-constexpr int kMaxThreads = 1024;
+constexpr int kMaxThreads = static_cast<int>(schema::threads.max);
 
 }  // namespace glint

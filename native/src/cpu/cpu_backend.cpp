@@ -290,32 +290,6 @@ class CpuBackend final : public Backend {
 
 }  // namespace
 
-float shininess_to_alpha(float shininess) {
-  const float a = shininess / kMaxShininess;
-  if (!(a > 0.0f)) return 0.0f;
-  return a > 1.0f ? 1.0f : a;
-}
-
-void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,
-                               const Image* weight) {
-  require_image(color, "reflection_color");
-  if (blurred) require_same_size(color, "reflection_color", *blurred, "reflection_blur");
-  require_same_size(color, "reflection_color", specular, "specular");
-  if (weight) require_same_size(color, "reflection_color", *weight, "specular_weight");
-}
-
-void require_combine_inputs(const Image& base, const Image& reflection, Combine mode,
-                            const Image* specular_base, const Image* coverage) {
-  require_image(base, "color");
-  require_same_size(base, "color", reflection, "reflection");
-  if (!specular_base) return;
-  if (mode != Combine::Over)
-    throw InvalidArgument("specular_base", "is replaced only with combine=\"over\"");
-  require_same_size(base, "color", *specular_base, "specular_base");
-  if (!coverage) throw InvalidArgument("coverage", "is needed with specular_base");
-  require_same_size(base, "color", *coverage, "coverage");
-}
-
 std::unique_ptr<Backend> make_cpu_backend(int threads) {
   return std::make_unique<CpuBackend>(threads);
 }

@@ -22,6 +22,7 @@
 #include <limits>
 
 #include "glint/marches.h"
+#include "glint/schema.h"
 #include "glint/stages.h"
 #include "hiz.h"
 #include "parallel.h"
@@ -32,37 +33,16 @@ namespace glint::cpu {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-// Picking the cell a ray enters: the point a 64th of a pixel past the
-// boundary it just crossed, in its direction of travel. Far below anything
-// that moves a reported uv, and above float rounding up to 16k pixels.
-constexpr float kCellNudge = 1.0f / 64.0f;
-// How far, relative to the surface's distance from the camera, the ray must
-// be behind a texel's plane to count as having crossed it. Keeps rays that
-// run along a surface (a floor's own rays, just above it) from hitting it
-// through rounding.
-constexpr float kPlaneTolerance = 1e-5f;
-// A ray found behind a texel's plane by at most this share of the texel's
-// view distance crossed the surface in the previous texel's footprint (each
-// texel has its own plane, so the crossing can fall between two of them).
-constexpr float kBehindSlack = 1e-3f;
-// Visibility (docs/marches.md): how well a hit is located, times a fade over
-// this share of the screen at its edges (Eevee's default edge fading). A hit
-// found on its texel's plane, off any outline, has confidence 1; one located
-// only to its texel (no usable normal, or a plane seen edge-on) or on an
-// outline texel, whose plane may extend past the object, kUncertain.
-constexpr float kEdgeFade = 0.075f;
-constexpr float kUncertain = 0.5f;
-// A texel's footprint range is clamped to its centre +- this share of its
-// view distance (plus its thickness): a plane seen edge-on would otherwise
-// reach infinity and make every cell above it overlap every ray.
-constexpr float kFootprintSpread = 0.5f;
-// Reusing a neighbour's ray (reuse_neighbours()): the pixels whose hits are
-// shared lie on one smooth surface, their normals within ~11 degrees and
-// their view distances within 2% of each other, and the hits lie within 3
-// pixels of each other, so that their mean is within 1.5 pixels of each.
-constexpr float kReuseCos = 0.98f;
-constexpr float kReuseDepth = 0.02f;
-constexpr float kReusePixels = 3.0f;
+// The method's constants, and why each has its value: glint/schema.h.
+constexpr float kCellNudge = hiz::kCellNudge;
+constexpr float kPlaneTolerance = hiz::kPlaneTolerance;
+constexpr float kBehindSlack = hiz::kBehindSlack;
+constexpr float kEdgeFade = hiz::kEdgeFade;
+constexpr float kUncertain = hiz::kUncertain;
+constexpr float kFootprintSpread = hiz::kFootprintSpread;
+constexpr float kReuseCos = hiz::kReuseCos;
+constexpr float kReuseDepth = hiz::kReuseDepth;
+constexpr float kReusePixels = hiz::kReusePixels;
 // Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
 constexpr int kMaxLevels = 32;
 

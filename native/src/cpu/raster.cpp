@@ -366,10 +366,6 @@ Vec3 apply_normal_map(const RasterInputs& in, const Image& map, size_t tri, cons
 
 }  // namespace
 
-// A back face must lie this share of the front's view distance behind it to
-// count: coplanar duplicates and the front triangle's own back side do not.
-constexpr double kBackSeparation = 1e-6;
-
 namespace {
 
 // One chunk of triangles, set up and binned into bands of rows.

@@ -1,6 +1,6 @@
 // What every screen-space march of the CPU backend shares: small float
 // vector maths in the shaders' operation order, the pixel's own ray, the
-// near-plane clip (SPEC fix 2) and the projection to pixel coordinates.
+// near-plane clip (fix 2 of docs/conventions.md) and the projection to pixel coordinates.
 #pragma once
 #include <cmath>
 

@@ -7,8 +7,6 @@
 
 namespace glint::cpu {
 
-Image trace_seed(const TraceInputs& in, const TraceOptions& opt, int threads);
-Image trace_linear(const TraceInputs& in, const TraceOptions& opt, int threads);
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);
 Image trace_exact(const TraceInputs& in, const TraceOptions& opt, int threads);
 

@@ -54,7 +54,7 @@ constexpr int kRequiredMinor = 3;
 }  // namespace
 
 // The EGL entry points, from the dlopen()ed library.
-struct EglContext::Egl {
+struct EglState {
   void* lib = nullptr;
   PFNEGLGETPROCADDRESSPROC GetProcAddress = nullptr;
   PFNEGLGETERRORPROC GetError = nullptr;
@@ -116,14 +116,22 @@ const char* gl_error_name(unsigned int code) {
   }
 }
 
-EglContext::EglContext(const std::string& library) : egl_(std::make_unique<Egl>()) {
-  Egl& e = *egl_;
-  info_.egl_library = library;
-  const std::string prefix = "OpenGL backend unavailable: ";
+namespace {
 
-  // --- the library ---------------------------------------------------------
-  // RTLD_LOCAL: EGL's symbols stay out of the global namespace, where they
-  // could clash with a host application's own GL (Blender links libGL).
+const char* const kPrefix = "OpenGL backend unavailable: ";
+
+// One headless display EGL could give: a platform and its native handle.
+struct Candidate {
+  EGLenum platform;
+  void* native;
+  std::string label;
+};
+
+// dlopen()s `library` and finds every EGL entry point Glint calls.
+// RTLD_LOCAL: EGL's symbols stay out of the global namespace, where they
+// could clash with a host application's own GL (Blender links libGL).
+void load_egl(EglState& e, const std::string& library) {
+  const std::string prefix = kPrefix;
   refuse_after_fork();
   e.lib = dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (e.lib) g_egl_pid.store(getpid());
@@ -161,171 +169,163 @@ EglContext::EglContext(const std::string& library) : egl_(std::make_unique<Egl>(
       reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(e.GetProcAddress("eglQueryDevicesEXT"));
   e.QueryDeviceStringEXT = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
       e.GetProcAddress("eglQueryDeviceStringEXT"));
+}
 
-  // --- candidate displays, best first ---------------------------------------
-  // A hardware EGL device (a GPU driver's), then Mesa's surfaceless platform,
-  // then a software EGL device: the last two are both llvmpipe on Mesa, and
-  // surfaceless is the better-trodden path there.
+// The displays to try, best first: a hardware EGL device (a GPU driver's),
+// then Mesa's surfaceless platform, then a software EGL device. The last two
+// are both llvmpipe on Mesa, and surfaceless is the better-trodden path
+// there. What this EGL cannot offer is noted in `tried`.
+std::vector<Candidate> candidate_displays(const EglState& e, std::vector<std::string>& tried) {
   const char* client_ext = e.QueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-  struct Candidate {
-    EGLenum platform;
-    void* native;
-    std::string label;
-  };
   std::vector<Candidate> hardware, software, surfaceless;
-  std::vector<std::string> tried;
   if (!e.GetPlatformDisplayEXT || !has_extension(client_ext, "EGL_EXT_platform_base")) {
     tried.push_back("no EGL_EXT_platform_base, so no headless platform can be named");
-  } else {
-    if (has_extension(client_ext, "EGL_EXT_platform_device") && e.QueryDevicesEXT) {
-      EGLint count = 0;
-      std::vector<EGLDeviceEXT> devices(16);
-      if (e.QueryDevicesEXT(static_cast<EGLint>(devices.size()), devices.data(), &count) &&
-          count > 0) {
-        for (EGLint i = 0; i < count; ++i) {
-          const char* dext =
-              e.QueryDeviceStringEXT ? e.QueryDeviceStringEXT(devices[i], EGL_EXTENSIONS) : nullptr;
-          const bool soft = has_extension(dext, "EGL_MESA_device_software");
-          std::string label = "EGL device " + std::to_string(i) + (soft ? " (software)" : "");
-          (soft ? software : hardware).push_back({EGL_PLATFORM_DEVICE_EXT, devices[i], label});
-        }
-      } else {
-        tried.push_back("EGL device platform: no devices");
+    return {};
+  }
+  if (has_extension(client_ext, "EGL_EXT_platform_device") && e.QueryDevicesEXT) {
+    EGLint count = 0;
+    std::vector<EGLDeviceEXT> devices(16);
+    if (e.QueryDevicesEXT(static_cast<EGLint>(devices.size()), devices.data(), &count) && count > 0) {
+      for (EGLint i = 0; i < count; ++i) {
+        const char* dext =
+            e.QueryDeviceStringEXT ? e.QueryDeviceStringEXT(devices[i], EGL_EXTENSIONS) : nullptr;
+        const bool soft = has_extension(dext, "EGL_MESA_device_software");
+        std::string label = "EGL device " + std::to_string(i) + (soft ? " (software)" : "");
+        (soft ? software : hardware).push_back({EGL_PLATFORM_DEVICE_EXT, devices[i], label});
       }
     } else {
-      tried.push_back("EGL device platform: not supported by this EGL");
+      tried.push_back("EGL device platform: no devices");
     }
-    if (has_extension(client_ext, "EGL_MESA_platform_surfaceless")) {
-      surfaceless.push_back({EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
-                             "EGL surfaceless (Mesa)"});
-    } else {
-      tried.push_back("EGL surfaceless platform: not supported by this EGL");
-    }
+  } else {
+    tried.push_back("EGL device platform: not supported by this EGL");
+  }
+  if (has_extension(client_ext, "EGL_MESA_platform_surfaceless")) {
+    surfaceless.push_back({EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "EGL surfaceless (Mesa)"});
+  } else {
+    tried.push_back("EGL surfaceless platform: not supported by this EGL");
   }
   std::vector<Candidate> order = hardware;
   order.insert(order.end(), surfaceless.begin(), surfaceless.end());
   order.insert(order.end(), software.begin(), software.end());
+  return order;
+}
 
-  std::string too_old;  // the first "GL too old" finding, the most useful message
-  for (const Candidate& c : order) {
-    EGLDisplay dpy = e.GetPlatformDisplayEXT(c.platform, c.native, nullptr);
-    if (dpy == EGL_NO_DISPLAY) {
-      tried.push_back(c.label + ": no display (" + e.error() + ")");
-      continue;
-    }
-    EGLint major = 0, minor = 0;
-    if (!e.Initialize(dpy, &major, &minor)) {
-      tried.push_back(c.label + ": eglInitialize failed (" + e.error() + ")");
-      continue;
-    }
-    auto give_up = [&](const std::string& why) {
-      tried.push_back(c.label + ": " + why);
+std::string required_version() {
+  return "OpenGL " + std::to_string(kRequiredMajor) + "." + std::to_string(kRequiredMinor) + " core is needed, ";
+}
+
+// Why a display refused the 4.3 core context, with what a default context
+// of this driver offers when it makes one.
+std::string refused_context_reason(const EglState& e, EGLDisplay dpy, EGLConfig config) {
+  const std::string why = e.error();
+  std::string found;
+  EGLContext probe = e.CreateContext(dpy, config, EGL_NO_CONTEXT, nullptr);
+  if (probe != EGL_NO_CONTEXT) {
+    if (e.MakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, probe)) {
+      auto get_string = reinterpret_cast<PFNGLGETSTRINGPROC>(e.GetProcAddress("glGetString"));
+      const GLubyte* v = get_string ? get_string(GL_VERSION) : nullptr;
+      if (v) found = reinterpret_cast<const char*>(v);
       e.MakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-      if (e.surface != EGL_NO_SURFACE) e.DestroySurface(dpy, e.surface);
-      if (e.context != EGL_NO_CONTEXT) e.DestroyContext(dpy, e.context);
-      e.surface = EGL_NO_SURFACE;
-      e.context = EGL_NO_CONTEXT;
-      // Not terminated, for the reason given in ~EglContext.
-    };
-    const char* dext = e.QueryString(dpy, EGL_EXTENSIONS);
-    if (!e.BindAPI(EGL_OPENGL_API)) {
-      give_up("no desktop OpenGL API (" + std::string(e.error()) + ")");
-      continue;
     }
-    const bool surfaceless_ok = has_extension(dext, "EGL_KHR_surfaceless_context");
-    EGLConfig config = nullptr;  // EGL_NO_CONFIG_KHR
-    if (!surfaceless_ok || !has_extension(dext, "EGL_KHR_no_config_context")) {
-      const EGLint want[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
-                             EGL_NONE};
-      EGLint n = 0;
-      if (!e.ChooseConfig(dpy, want, &config, 1, &n) || n < 1) {
-        give_up("no EGL config for OpenGL");
-        continue;
-      }
-    }
-    const EGLint ctx_attr[] = {EGL_CONTEXT_MAJOR_VERSION, kRequiredMajor,
-                               EGL_CONTEXT_MINOR_VERSION, kRequiredMinor,
-                               EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                               EGL_NONE};
-    e.context = e.CreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attr);
-    if (e.context == EGL_NO_CONTEXT) {
-      // Ask a default context what this driver does offer, for the message.
-      const std::string why = e.error();
-      std::string found;
-      EGLContext probe = e.CreateContext(dpy, config, EGL_NO_CONTEXT, nullptr);
-      if (probe != EGL_NO_CONTEXT) {
-        if (e.MakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, probe)) {
-          auto get_string =
-              reinterpret_cast<PFNGLGETSTRINGPROC>(e.GetProcAddress("glGetString"));
-          const GLubyte* v = get_string ? get_string(GL_VERSION) : nullptr;
-          if (v) found = reinterpret_cast<const char*>(v);
-          e.MakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-        }
-        e.DestroyContext(dpy, probe);
-      }
-      const std::string msg = "OpenGL " + std::to_string(kRequiredMajor) + "." +
-                              std::to_string(kRequiredMinor) + " core is needed, " +
-                              (found.empty() ? "the driver refused it (" + why + ")"
-                                             : "the driver offers OpenGL " + found);
-      if (too_old.empty()) too_old = c.label + ": " + msg;
-      give_up(msg);
-      continue;
-    }
-    if (!surfaceless_ok) {
-      const EGLint pb[] = {EGL_WIDTH, 1, EGL_HEIGHT, 1, EGL_NONE};
-      e.surface = e.CreatePbufferSurface(dpy, config, pb);
-      if (e.surface == EGL_NO_SURFACE) {
-        give_up("no pbuffer surface (" + std::string(e.error()) + ")");
-        continue;
-      }
-    }
-    if (!e.MakeCurrent(dpy, e.surface, e.surface, e.context)) {
-      give_up("eglMakeCurrent failed (" + std::string(e.error()) + ")");
-      continue;
-    }
-    // Every GL entry point; a missing one means a broken or partial driver.
-    std::string missing;
-#define GLINT_GL_LOAD(type, name)                                                     \
-  api_.name = reinterpret_cast<type>(e.GetProcAddress("gl" #name));                  \
-  if (!api_.name && missing.empty()) missing = "gl" #name;
-    GLINT_GL_FUNCTIONS(GLINT_GL_LOAD)
-#undef GLINT_GL_LOAD
-    if (!missing.empty()) {
-      give_up("the driver has no " + missing);
-      continue;
-    }
-    GLint gl_major = 0, gl_minor = 0;
-    api_.GetIntegerv(GL_MAJOR_VERSION, &gl_major);
-    api_.GetIntegerv(GL_MINOR_VERSION, &gl_minor);
-    const GLubyte* version = api_.GetString(GL_VERSION);
-    const GLubyte* renderer = api_.GetString(GL_RENDERER);
-    info_.gl_version = version ? reinterpret_cast<const char*>(version) : "?";
-    info_.renderer = renderer ? reinterpret_cast<const char*>(renderer) : "?";
-    if (gl_major < kRequiredMajor || (gl_major == kRequiredMajor && gl_minor < kRequiredMinor)) {
-      const std::string msg = "OpenGL " + std::to_string(kRequiredMajor) + "." +
-                              std::to_string(kRequiredMinor) + " core is needed, the driver gave " +
-                              info_.gl_version + " (" + info_.renderer + ")";
-      if (too_old.empty()) too_old = c.label + ": " + msg;
-      give_up(msg);
-      continue;
-    }
-    api_.GetIntegerv(GL_MAX_TEXTURE_SIZE, &info_.max_texture_size);
-    api_.GetIntegerv(GL_MAX_VIEWPORT_DIMS, info_.max_viewport);
-    api_.GetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &info_.max_renderbuffer_size);
-    e.display = dpy;
-    info_.platform = c.label;
-    return;
+    e.DestroyContext(dpy, probe);
   }
+  return required_version() +
+         (found.empty() ? "the driver refused it (" + why + ")" : "the driver offers OpenGL " + found);
+}
 
+// Every GL entry point into `api`; the name of the first one the driver
+// lacks (a broken or partial driver), "" when all are there.
+std::string load_gl_functions(const EglState& e, Api& api) {
+  std::string missing;
+#define GLINT_GL_LOAD(type, name)                                        \
+  api.name = reinterpret_cast<type>(e.GetProcAddress("gl" #name));      \
+  if (!api.name && missing.empty()) missing = "gl" #name;
+  GLINT_GL_FUNCTIONS(GLINT_GL_LOAD)
+#undef GLINT_GL_LOAD
+  return missing;
+}
+
+// What an attempt on `dpy` made, released; not the display itself, for the
+// reason given in ~EglContext.
+void release_attempt(EglState& e, EGLDisplay dpy) {
+  e.MakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  if (e.surface != EGL_NO_SURFACE) e.DestroySurface(dpy, e.surface);
+  if (e.context != EGL_NO_CONTEXT) e.DestroyContext(dpy, e.context);
+  e.surface = EGL_NO_SURFACE;
+  e.context = EGL_NO_CONTEXT;
+}
+
+// A 4.3 core context on `c`, made current with the GL loaded into `api`:
+// "" on success, else why not. `too_old` gets the first "GL too old" reason.
+std::string open_context(EglState& e, const Candidate& c, Api& api, ContextInfo& info, std::string& too_old) {
+  EGLDisplay dpy = e.GetPlatformDisplayEXT(c.platform, c.native, nullptr);
+  if (dpy == EGL_NO_DISPLAY) return "no display (" + std::string(e.error()) + ")";
+  EGLint major = 0, minor = 0;
+  if (!e.Initialize(dpy, &major, &minor)) return "eglInitialize failed (" + std::string(e.error()) + ")";
+  auto give_up = [&](const std::string& why) {
+    release_attempt(e, dpy);
+    return why;
+  };
+  const char* dext = e.QueryString(dpy, EGL_EXTENSIONS);
+  if (!e.BindAPI(EGL_OPENGL_API)) return give_up("no desktop OpenGL API (" + std::string(e.error()) + ")");
+  const bool surfaceless_ok = has_extension(dext, "EGL_KHR_surfaceless_context");
+  EGLConfig config = nullptr;  // EGL_NO_CONFIG_KHR
+  if (!surfaceless_ok || !has_extension(dext, "EGL_KHR_no_config_context")) {
+    const EGLint want[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+    EGLint n = 0;
+    if (!e.ChooseConfig(dpy, want, &config, 1, &n) || n < 1) return give_up("no EGL config for OpenGL");
+  }
+  const EGLint ctx_attr[] = {EGL_CONTEXT_MAJOR_VERSION, kRequiredMajor,
+                             EGL_CONTEXT_MINOR_VERSION, kRequiredMinor,
+                             EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                             EGL_NONE};
+  e.context = e.CreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attr);
+  if (e.context == EGL_NO_CONTEXT) {
+    const std::string msg = refused_context_reason(e, dpy, config);
+    if (too_old.empty()) too_old = c.label + ": " + msg;
+    return give_up(msg);
+  }
+  if (!surfaceless_ok) {
+    const EGLint pb[] = {EGL_WIDTH, 1, EGL_HEIGHT, 1, EGL_NONE};
+    e.surface = e.CreatePbufferSurface(dpy, config, pb);
+    if (e.surface == EGL_NO_SURFACE) return give_up("no pbuffer surface (" + std::string(e.error()) + ")");
+  }
+  if (!e.MakeCurrent(dpy, e.surface, e.surface, e.context))
+    return give_up("eglMakeCurrent failed (" + std::string(e.error()) + ")");
+  const std::string missing = load_gl_functions(e, api);
+  if (!missing.empty()) return give_up("the driver has no " + missing);
+  GLint gl_major = 0, gl_minor = 0;
+  api.GetIntegerv(GL_MAJOR_VERSION, &gl_major);
+  api.GetIntegerv(GL_MINOR_VERSION, &gl_minor);
+  const GLubyte* version = api.GetString(GL_VERSION);
+  const GLubyte* renderer = api.GetString(GL_RENDERER);
+  info.gl_version = version ? reinterpret_cast<const char*>(version) : "?";
+  info.renderer = renderer ? reinterpret_cast<const char*>(renderer) : "?";
+  if (gl_major < kRequiredMajor || (gl_major == kRequiredMajor && gl_minor < kRequiredMinor)) {
+    const std::string msg = required_version() + "the driver gave " + info.gl_version + " (" + info.renderer + ")";
+    if (too_old.empty()) too_old = c.label + ": " + msg;
+    return give_up(msg);
+  }
+  api.GetIntegerv(GL_MAX_TEXTURE_SIZE, &info.max_texture_size);
+  api.GetIntegerv(GL_MAX_VIEWPORT_DIMS, info.max_viewport);
+  api.GetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &info.max_renderbuffer_size);
+  e.display = dpy;
+  info.platform = c.label;
+  return "";
+}
+
+// No display gave a context: the most useful finding first ("GL too old"),
+// then everything else that was tried.
+BackendUnavailable unavailable(const std::string& library, bool no_candidates, const std::string& too_old,
+                               const std::vector<std::string>& tried) {
   std::ostringstream msg;
-  msg << prefix;
+  msg << kPrefix;
   if (!too_old.empty())
     msg << too_old;
-  else if (order.empty())
+  else if (no_candidates)
     msg << "EGL (\"" << library << "\") offers no headless display";
   else
-    msg << "no EGL display gave an OpenGL " << kRequiredMajor << "." << kRequiredMinor
-        << " core context";
+    msg << "no EGL display gave an OpenGL " << kRequiredMajor << "." << kRequiredMinor << " core context";
   std::vector<std::string> others;
   for (const auto& t : tried)
     if (t != too_old) others.push_back(t);
@@ -334,13 +334,29 @@ EglContext::EglContext(const std::string& library) : egl_(std::make_unique<Egl>(
     for (size_t i = 0; i < others.size(); ++i) msg << (i ? "; " : "") << others[i];
   }
   msg << ".";
+  return BackendUnavailable(msg.str());
+}
+
+}  // namespace
+
+EglContext::EglContext(const std::string& library) : egl_(std::make_unique<EglState>()) {
+  info_.egl_library = library;
+  load_egl(*egl_, library);
+  std::vector<std::string> tried;
+  const std::vector<Candidate> order = candidate_displays(*egl_, tried);
+  std::string too_old;
+  for (const Candidate& c : order) {
+    const std::string why = open_context(*egl_, c, api_, info_, too_old);
+    if (why.empty()) return;
+    tried.push_back(c.label + ": " + why);
+  }
   // The library stays loaded: unloading a Mesa that may have started threads
   // during eglInitialize is a known source of crashes at exit.
-  throw BackendUnavailable(msg.str());
+  throw unavailable(library, order.empty(), too_old, tried);
 }
 
 EglContext::~EglContext() {
-  Egl& e = *egl_;
+  EglState& e = *egl_;
   if (e.display == EGL_NO_DISPLAY) return;
   e.MakeCurrent(e.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   if (e.surface != EGL_NO_SURFACE) e.DestroySurface(e.display, e.surface);

@@ -25,6 +25,8 @@ struct ContextInfo {
 // "libEGL.so.1" (libglvnd's dispatcher, or a vendor's EGL).
 std::string egl_library_path();
 
+struct EglState;  // the dlopen()ed EGL and what it made (egl_context.cpp)
+
 class EglContext {
  public:
   // Opens `library`, finds a display (EGL device platform first, for a GPU,
@@ -42,8 +44,7 @@ class EglContext {
   const ContextInfo& info() const { return info_; }
 
  private:
-  struct Egl;
-  std::unique_ptr<Egl> egl_;
+  std::unique_ptr<EglState> egl_;
   Api api_;
   ContextInfo info_;
 };

@@ -6,14 +6,16 @@
 namespace glint::gl {
 
 struct EmbeddedShader {
-  const char* name;    // path under shaders/, e.g. "trace_seed.frag"
+  const char* name;    // what passes and includes call it, e.g. "trace_seed.frag"
+  const char* path;    // where the file is, from the repository root, for messages
   const char* source;  // includes resolved, with `#line <line> <file number>` directives
 };
 
 // nullptr when no entry point of that name was embedded.
 const EmbeddedShader* find_embedded_shader(const std::string& name);
 
-// The shader file behind a #line source-string number, nullptr when unknown.
+// The shader file behind a #line source-string number, from the repository
+// root ("shaders/common.glsl"), nullptr when unknown.
 const char* embedded_file_name(int number);
 
 }  // namespace glint::gl

@@ -121,6 +121,10 @@ class GlBackend final : public Backend {
     worker_.run([&](GlState& s) { s.compile_for_test(entry); });
   }
 
+  void compile_source_for_test(const std::string& entry, const std::string& source, FileNameFn file_name) {
+    worker_.run([&](GlState& s) { s.compile_source_for_test(entry, source, file_name); });
+  }
+
  private:
   Worker worker_;
   std::string description_;
@@ -169,6 +173,12 @@ void compile_for_test(Backend& b, const std::string& entry) {
   auto* g = dynamic_cast<GlBackend*>(&b);
   if (!g) throw Error("compile_for_test: not a GL backend");
   g->compile_for_test(entry);
+}
+
+void compile_for_test(Backend& b, const std::string& entry, const std::string& source, FileNameFn file_name) {
+  auto* g = dynamic_cast<GlBackend*>(&b);
+  if (!g) throw Error("compile_for_test: not a GL backend");
+  g->compile_source_for_test(entry, source, file_name);
 }
 
 }  // namespace gl

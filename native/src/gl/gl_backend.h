@@ -21,5 +21,9 @@ std::string describe(const Backend& gl_backend);
 // when it is a fragment shader) on the backend's context; throws glint::Error
 // carrying the compiler log mapped to shaders/<file>:<line>.
 void compile_for_test(Backend& gl_backend, const std::string& entry);
+// Compiles `source` as the entry `entry` (no link), for shaders a test embeds
+// itself; `file_name` maps its #line numbers to files.
+void compile_for_test(Backend& gl_backend, const std::string& entry, const std::string& source,
+                      const char* (*file_name)(int number));
 
 }  // namespace glint::gl

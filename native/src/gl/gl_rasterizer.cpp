@@ -99,20 +99,24 @@ void GlState::buffer_data(GLuint& buffer, GLenum target, size_t bytes, const voi
     throw Error(std::string("glint GL: uploading the ") + what + " buffer failed: " + gl_error_name(err));
 }
 
-GBufferImages GlState::rasterize(const RasterInputs& in) {
-  const int w = in.width, h = in.height;
-  const Mesh& mesh = in.mesh;
-  const size_t tris = mesh.triangle_count();
-  raster_targets(raster_, 3, w, h, "the G-buffer", "rasterize");
+namespace {
 
-  // Triangles with a non-finite corner are skipped, as on the CPU: they are
-  // collapsed to a point (zero area covers nothing). Corner normals that are
-  // non-finite or all zero give the face normal everywhere on the CPU, so
-  // they are replaced by it here. Both only copy when there is such a triangle.
-  const std::vector<float>* positions = &mesh.positions;
-  const std::vector<float>* normals = &mesh.normals;
-  std::vector<float> pos_copy, nrm_copy;
+// The mesh as the G-buffer pass can take it: triangles with a non-finite
+// corner are skipped, as on the CPU, by collapsing them to a point (zero
+// area covers nothing); corner normals that are non-finite or all zero give
+// the face normal everywhere on the CPU, so they are replaced by it here.
+// Both copy only when there is such a triangle. Also the range of the
+// visible corners' view distances, for the depth mapping.
+struct CleanMesh {
+  std::vector<float> pos_copy, nrm_copy;  // empty: the mesh's own are fine
   double d_min = 0.0, d_max = 0.0;
+};
+
+CleanMesh clean_mesh(const Mesh& mesh) {
+  CleanMesh out;
+  std::vector<float>& pos_copy = out.pos_copy;  // short names for the loop below
+  std::vector<float>& nrm_copy = out.nrm_copy;
+  const size_t tris = mesh.triangle_count();
   bool any_vertex = false;
   for (size_t t = 0; t < tris; ++t) {
     const float* p = mesh.positions.data() + t * 9;
@@ -125,8 +129,8 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
     }
     for (int k = 0; k < 3; ++k) {
       const double d = -static_cast<double>(p[3 * k + 2]);
-      if (!any_vertex || d < d_min) d_min = d;
-      if (!any_vertex || d > d_max) d_max = d;
+      if (!any_vertex || d < out.d_min) out.d_min = d;
+      if (!any_vertex || d > out.d_max) out.d_max = d;
       any_vertex = true;
     }
     const float* n = mesh.normals.data() + t * 9;
@@ -147,9 +151,15 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
           nrm_copy[t * 9 + 3 * k + a] = len > 1e-30 ? static_cast<float>(c[a] / len) : 0.0f;
     }
   }
-  if (!pos_copy.empty()) positions = &pos_copy;
-  if (!nrm_copy.empty()) normals = &nrm_copy;
+  return out;
+}
 
+// View distance d is stored as (d - base) * scale in the depth buffer.
+struct DepthMapping {
+  double base, scale;
+};
+
+DepthMapping depth_mapping(const Mat4& projection, double d_min, double d_max) {
   // The depth test compares view distances, as the CPU does. A float depth
   // buffer still only takes [0, 1], so the distance is offset and scaled by
   // a power of two: the scaling is exact, and with no offset (all of a
@@ -157,13 +167,13 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   // keeps every bit of the distance.
   // A lower bound of the visible view distances: the near plane for a
   // perspective (> 0) or orthographic camera, else the nearest corner.
-  const ProjectionKind kind = classify_projection(in.projection);
+  const ProjectionKind kind = classify_projection(projection);
   double lower = d_min;
   if (kind == ProjectionKind::Perspective) {
     lower = 0.0;
   } else if (kind == ProjectionKind::Orthographic) {
     // clip z = -1 on the near plane
-    lower = std::max(d_min, (1.0 + in.projection(2, 3)) / in.projection(2, 2));
+    lower = std::max(d_min, (1.0 + projection(2, 3)) / projection(2, 2));
   }
   // Rounded down a little so that float rounding of the base cannot push a
   // visible distance below it (it would be clamped to 0 and tie).
@@ -171,16 +181,45 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   int exponent = 0;
   std::frexp(std::max(d_max - base, 1e-30), &exponent);
   const double depth_scale = std::ldexp(1.0, -(exponent + 1));  // (d - base) * scale < 0.5
+  return {base, depth_scale};
+}
 
-  // --- buffers ---------------------------------------------------------------
+}  // namespace
+
+GBufferImages GlState::rasterize(const RasterInputs& in) {
+  const int w = in.width, h = in.height;
+  const size_t tris = in.mesh.triangle_count();
+  raster_targets(raster_, 3, w, h, "the G-buffer", "rasterize");
+  const CleanMesh clean = clean_mesh(in.mesh);
+  const DepthMapping depth = depth_mapping(in.projection, clean.d_min, clean.d_max);
+  upload_mesh(in, clean.pos_copy.empty() ? in.mesh.positions : clean.pos_copy,
+              clean.nrm_copy.empty() ? in.mesh.normals : clean.nrm_copy);
+  upload_normal_maps(in.normal_maps);
+  float pf[16];
+  for (int i = 0; i < 16; ++i) pf[i] = static_cast<float>(in.projection.m[i]);
+  draw_gbuffer(in, depth.base, depth.scale, pf);
+
+  GBufferImages out;
+  out.position = read(w, h, GL_COLOR_ATTACHMENT0, "rasterize");
+  out.normal = read(w, h, GL_COLOR_ATTACHMENT1, "rasterize");
+  out.specular = read(w, h, GL_COLOR_ATTACHMENT2, "rasterize");
+  if (in.back_layer) out.back_position = rasterize_back(w, h, tris, depth.base, depth.scale, pf);
+  return out;
+}
+
+// The triangles' arrays, the material table and the vertex array object.
+void GlState::upload_mesh(const RasterInputs& in, const std::vector<float>& positions,
+                          const std::vector<float>& normals) {
+  const Mesh& mesh = in.mesh;
+  const size_t tris = mesh.triangle_count();
   // uvs and tangents are only bound when they are there for every triangle
   // (validate() guarantees it wherever a triangle's material has a map).
   bool any_map = tris > 0 && mesh.uvs.size() == tris * 6 && mesh.tangents.size() == tris * 12;
   bool map_used = false;
   for (const Material& m : in.materials) map_used = map_used || m.normal_map >= 0;
   any_map = any_map && map_used;
-  buffer_data(buffers_[0], GL_ARRAY_BUFFER, positions->size() * sizeof(float), positions->data(), "positions");
-  buffer_data(buffers_[1], GL_ARRAY_BUFFER, normals->size() * sizeof(float), normals->data(), "normals");
+  buffer_data(buffers_[0], GL_ARRAY_BUFFER, positions.size() * sizeof(float), positions.data(), "positions");
+  buffer_data(buffers_[1], GL_ARRAY_BUFFER, normals.size() * sizeof(float), normals.data(), "normals");
   if (any_map) {
     buffer_data(buffers_[2], GL_ARRAY_BUFFER, mesh.uvs.size() * sizeof(float), mesh.uvs.data(), "uvs");
     buffer_data(buffers_[3], GL_ARRAY_BUFFER, mesh.tangents.size() * sizeof(float), mesh.tangents.data(),
@@ -221,17 +260,19 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   }
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers_[4]);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers_[5]);
+}
 
-  // Normal maps: one texture each, sampled GL_LINEAR + GL_REPEAT like the
-  // CPU's sample_normal_map().
+// Normal maps: one texture each, sampled GL_LINEAR + GL_REPEAT like the
+// CPU's sample_normal_map().
+void GlState::upload_normal_maps(const std::vector<Image>& maps) {
   if (!normal_map_textures_.empty())
     gl_.DeleteTextures(static_cast<GLsizei>(normal_map_textures_.size()), normal_map_textures_.data());
-  normal_map_textures_.assign(in.normal_maps.size(), 0);
+  normal_map_textures_.assign(maps.size(), 0);
   if (!normal_map_textures_.empty()) {
     gl_.GenTextures(static_cast<GLsizei>(normal_map_textures_.size()), normal_map_textures_.data());
     scratch_unit();
-    for (size_t k = 0; k < in.normal_maps.size(); ++k) {
-      const Image& img = in.normal_maps[k];
+    for (size_t k = 0; k < maps.size(); ++k) {
+      const Image& img = maps[k];
       check_size(img.width, img.height, "a normal map", 1);
       gl_.BindTexture(GL_TEXTURE_2D, normal_map_textures_[k]);
       gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
@@ -245,17 +286,20 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
     }
     const GLenum err = gl_.GetError();
     if (err == GL_OUT_OF_MEMORY)
-      throw Error("glint GL: out of memory uploading " + std::to_string(in.normal_maps.size()) +
+      throw Error("glint GL: out of memory uploading " + std::to_string(maps.size()) +
                   " normal maps");
     if (err != GL_NO_ERROR)
       throw Error(std::string("glint GL: uploading the normal maps failed: ") + gl_error_name(err));
   }
+}
 
-  // --- the pass ----------------------------------------------------------------
+// The G-buffer pass over the uploaded mesh into raster_.
+void GlState::draw_gbuffer(const RasterInputs& in, double base, double depth_scale, const float* pf) {
+  const Mesh& mesh = in.mesh;
+  const size_t tris = mesh.triangle_count();
+  const int w = in.width, h = in.height;
   const GLuint prog = program("gbuffer.frag", "gbuffer.vert");
   gl_.UseProgram(prog);
-  float pf[16];
-  for (int i = 0; i < 16; ++i) pf[i] = static_cast<float>(in.projection.m[i]);
   gl_.Uniform1fv(loc(prog, "u_proj"), 16, pf);
   gl_.Uniform1f(loc(prog, "u_depth_base"), static_cast<float>(base));
   gl_.Uniform1f(loc(prog, "u_depth_scale"), static_cast<float>(depth_scale));
@@ -291,13 +335,6 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   }
   gl_.Disable(GL_DEPTH_TEST);
   debug_check("rasterize (G-buffer pass)");
-
-  GBufferImages out;
-  out.position = read(w, h, GL_COLOR_ATTACHMENT0, "rasterize");
-  out.normal = read(w, h, GL_COLOR_ATTACHMENT1, "rasterize");
-  out.specular = read(w, h, GL_COLOR_ATTACHMENT2, "rasterize");
-  if (in.back_layer) out.back_position = rasterize_back(w, h, tris, base, depth_scale, pf);
-  return out;
 }
 
 // The back-face layer: every triangle again into a target of its own, each

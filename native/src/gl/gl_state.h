@@ -99,6 +99,8 @@ class GlState {
   GBufferImages rasterize(const RasterInputs& in);
 
   void compile_for_test(const std::string& entry);
+  // Compiles `source` (a test's own embedded shader) as the entry `entry`.
+  void compile_source_for_test(const std::string& entry, const std::string& source, FileNameFn file_name);
 
  private:
   // Textures are kept between calls and reallocated only when the size
@@ -176,6 +178,10 @@ class GlState {
   // (Re)allocates `t` for a w x h frame when its size changed. `what` names
   // it in errors ("the G-buffer"), `pass` is the stage for out-of-memory ones.
   void raster_targets(RasterTargets& t, int colors, int w, int h, const char* what, const char* pass);
+  // The steps of rasterize(), in order (gl_rasterizer.cpp).
+  void upload_mesh(const RasterInputs& in, const std::vector<float>& positions, const std::vector<float>& normals);
+  void upload_normal_maps(const std::vector<Image>& maps);
+  void draw_gbuffer(const RasterInputs& in, double base, double depth_scale, const float* proj);
   Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
   // `bytes` of `data` (or uninitialised, for nullptr) into `buffer`, generated
   // on first use and bound to `target`; GL_OUT_OF_MEMORY is an Error naming `what`.

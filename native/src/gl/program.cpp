@@ -7,7 +7,6 @@
 #include "glint/errors.h"
 
 namespace glint::gl {
-namespace {
 
 GLenum stage_of(const std::string& entry) {
   auto ends = [&](const char* ext) {
@@ -21,6 +20,15 @@ GLenum stage_of(const std::string& entry) {
   throw Error("glint GL: cannot tell the shader stage of \"" + entry + "\" from its extension");
 }
 
+namespace {
+
+// Where an entry point's file is, for messages: the embedded path, or under
+// shaders/ for one the library does not hold (a test's own).
+std::string entry_path(const std::string& entry) {
+  const EmbeddedShader* s = find_embedded_shader(entry);
+  return s ? s->path : "shaders/" + entry;
+}
+
 // Reads a run of digits at s[i]; false when there is none.
 bool digits_at(const std::string& s, size_t& i, long& value) {
   const size_t start = i;
@@ -30,7 +38,7 @@ bool digits_at(const std::string& s, size_t& i, long& value) {
   return i > start;
 }
 
-std::string map_line(const std::string& line, const std::string& entry) {
+std::string map_line(const std::string& line, const std::string& entry, FileNameFn file_name) {
   // The first "<n>:<m>" or "<n>(<m>)" that is not part of a longer word.
   for (size_t i = 0; i < line.size(); ++i) {
     if (!std::isdigit(static_cast<unsigned char>(line[i]))) continue;
@@ -58,9 +66,10 @@ std::string map_line(const std::string& line, const std::string& entry) {
       }
       ++k;
     }
-    const char* file = string_no == 0 ? entry.c_str() : embedded_file_name(static_cast<int>(string_no));
-    if (!file) return line;
-    return line.substr(0, i) + "shaders/" + file + ":" + std::to_string(line_no) + line.substr(k);
+    const char* listed = string_no == 0 ? nullptr : file_name(static_cast<int>(string_no));
+    if (string_no != 0 && !listed) return line;
+    const std::string file = string_no == 0 ? entry_path(entry) : listed;
+    return line.substr(0, i) + file + ":" + std::to_string(line_no) + line.substr(k);
   }
   return line;
 }
@@ -77,21 +86,21 @@ std::string stage_name(GLenum stage) {
 
 }  // namespace
 
-std::string map_shader_log(const std::string& log, const std::string& entry) {
+std::string map_shader_log(const std::string& log, const std::string& entry, FileNameFn file_name) {
   std::istringstream in(log);
   std::string line, out;
   while (std::getline(in, line)) {
     if (line.empty()) continue;
-    out += map_line(line, entry);
+    out += map_line(line, entry, file_name);
     out += '\n';
   }
   return out;
 }
 
 GLuint compile_source(const Api& gl, GLenum stage, const std::string& source,
-                      const std::string& entry) {
+                      const std::string& entry, FileNameFn file_name) {
   GLuint shader = gl.CreateShader(stage);
-  if (!shader) throw Error("glint GL: glCreateShader failed for shaders/" + entry);
+  if (!shader) throw Error("glint GL: glCreateShader failed for " + entry_path(entry));
   const char* text = source.c_str();
   gl.ShaderSource(shader, 1, &text, nullptr);
   gl.CompileShader(shader);
@@ -104,8 +113,8 @@ GLuint compile_source(const Api& gl, GLenum stage, const std::string& source,
     gl.GetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, &log[0]);
     log.resize(std::char_traits<char>::length(log.c_str()));
     gl.DeleteShader(shader);
-    throw Error("glint GL: compiling the " + stage_name(stage) + " shader shaders/" + entry +
-                " failed:\n" + map_shader_log(log, entry));
+    throw Error("glint GL: compiling the " + stage_name(stage) + " shader " + entry_path(entry) +
+                " failed:\n" + map_shader_log(log, entry, file_name));
   }
   return shader;
 }
@@ -141,7 +150,7 @@ GLuint link_program(const Api& gl, const std::vector<std::string>& entries) {
     log.resize(std::char_traits<char>::length(log.c_str()));
     gl.DeleteProgram(program);
     std::string names;
-    for (const auto& e : entries) names += (names.empty() ? "shaders/" : " + shaders/") + e;
+    for (const auto& e : entries) names += (names.empty() ? "" : " + ") + entry_path(e);
     throw Error("glint GL: linking " + names + " failed:\n" +
                 map_shader_log(log, entries.empty() ? "" : entries.back()));
   }

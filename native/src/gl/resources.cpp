@@ -83,6 +83,11 @@ void GlState::compile_for_test(const std::string& entry) {
   gl_.DeleteProgram(link_program(gl_, stages));
 }
 
+void GlState::compile_source_for_test(const std::string& entry, const std::string& source,
+                                      FileNameFn file_name) {
+  gl_.DeleteShader(compile_source(gl_, stage_of(entry), source, entry, file_name));
+}
+
 void GlState::release(Texture& t) {
   if (t.id) gl_.DeleteTextures(1, &t.id);
   t = Texture{};

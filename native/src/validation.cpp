@@ -1,13 +1,17 @@
-// Checks on RasterInputs shared by every backend. Error messages use the
-// Python keyword names of glint_core.rasterize, since that is what users see.
+// The checks every stage's inputs pass before it runs, whichever backend runs
+// it (glint/validation.h, and validate(RasterInputs) of glint/raster.h).
+// Error messages use the Python keyword names, since that is what users see.
+#include "glint/validation.h"
+
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "glint/errors.h"
+#include "glint/marches.h"
+#include "glint/mesh.h"
 #include "glint/options.h"
 #include "glint/raster.h"
-#include "glint/stages.h"
 
 namespace glint {
 
@@ -23,6 +27,75 @@ void require_count(size_t have, size_t triangles, size_t per_triangle, const cha
 }
 
 }  // namespace
+
+void require_image(const Image& img, const char* name) {
+  if (img.width <= 0 || img.height <= 0)
+    throw InvalidArgument(name, "expected a non-empty image, got " + std::to_string(img.width) +
+                                    "x" + std::to_string(img.height));
+  if (img.width > kMaxImageSide || img.height > kMaxImageSide)
+    throw InvalidArgument(name, "expected at most " + std::to_string(kMaxImageSide) +
+                                    " pixels a side, got " + std::to_string(img.width) + "x" +
+                                    std::to_string(img.height));
+  if (img.data.size() != img.pixel_count() * 4)
+    throw InvalidArgument(name, "pixel storage does not match its size");
+}
+
+void require_same_size(const Image& a, const char* a_name, const Image& b, const char* b_name) {
+  require_image(b, b_name);
+  if (a.width != b.width || a.height != b.height)
+    throw InvalidArgument(b_name, std::string("expected the size of ") + a_name + " (" +
+                                      std::to_string(a.width) + "x" + std::to_string(a.height) +
+                                      "), got " + std::to_string(b.width) + "x" +
+                                      std::to_string(b.height));
+}
+
+void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt) {
+  require_image(in.position, "position");
+  require_same_size(in.position, "position", in.normal, "normal");
+  if (in.specular) require_same_size(in.position, "position", *in.specular, "specular");
+  if (in.back_position)
+    require_same_size(in.position, "position", *in.back_position, "back_position");
+  validate(opt);
+  validate_projection(in.projection);
+  const MarchInfo& info = march_info(opt.march);
+  if (info.needs_mesh && !in.mesh)
+    throw InvalidArgument("mesh", std::string("march \"") + info.name +
+                                      "\" traces the scene's triangles: pass mesh=(vertices, triangles)");
+}
+
+void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
+                                    const Mat4& projection) {
+  require_image(position, "position");
+  require_same_size(position, "position", normal, "normal");
+  require_same_size(position, "position", specular, "specular");
+  validate_projection(projection);
+}
+
+void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular) {
+  require_image(color, "reflection_color");
+  require_same_size(color, "reflection_color", uv, "uv");
+  require_same_size(color, "reflection_color", specular, "specular");
+}
+
+void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,
+                               const Image* weight) {
+  require_image(color, "reflection_color");
+  if (blurred) require_same_size(color, "reflection_color", *blurred, "reflection_blur");
+  require_same_size(color, "reflection_color", specular, "specular");
+  if (weight) require_same_size(color, "reflection_color", *weight, "specular_weight");
+}
+
+void require_combine_inputs(const Image& base, const Image& reflection, Combine mode,
+                            const Image* specular_base, const Image* coverage) {
+  require_image(base, "color");
+  require_same_size(base, "color", reflection, "reflection");
+  if (!specular_base) return;
+  if (mode != Combine::Over)
+    throw InvalidArgument("specular_base", "is replaced only with combine=\"over\"");
+  require_same_size(base, "color", *specular_base, "specular_base");
+  if (!coverage) throw InvalidArgument("coverage", "is needed with specular_base");
+  require_same_size(base, "color", *coverage, "coverage");
+}
 
 void validate(const RasterInputs& in) {
   if (in.width < 1 || in.width > kMaxImageSide)

@@ -1,7 +1,7 @@
 #version 430 core
 // The book's older single march ("linear"): fixed view-space steps along the
 // reflected ray, and after a hit a step back to the last miss and a finer
-// approach. A port of march_linear() in native/src/cpu/march.cpp.
+// approach. A port of march_linear() in native/src/cpu/march_linear.cpp.
 // Output: (u, v, visibility, visibility).
 #include "common.glsl"
 #include "fragment.glsl"

@@ -1,12 +1,20 @@
-// cone_lod(): the cone blur's per-pixel level of detail as an image, for a
+// The out-of-line part of glint/material.h: the specular buffer's alpha, and
+// cone_lod(), the cone blur's per-pixel level of detail as an image, for a
 // compositor that samples the reflection colour itself (the Blender add-on's
 // node group blends Gaussian levels by it; docs/addon.md).
-#include "glint/stages.h"
+#include "glint/material.h"
 
 #include "glint/errors.h"
+#include "glint/validation.h"
 #include "parallel.h"
 
 namespace glint {
+
+float shininess_to_alpha(float shininess) {
+  const float a = shininess / kMaxShininess;
+  if (!(a > 0.0f)) return 0.0f;
+  return a > 1.0f ? 1.0f : a;
+}
 
 Image cone_lod(const Image& uv, const Image& specular) {
   require_image(uv, "uv");

@@ -1,8 +1,8 @@
 #version 430 core
 // The seed chapter's two-pass march ("seed"): a coarse pass over screen
 // pixels, then bisection. A line-by-line port of march_seed() in
-// native/src/cpu/march.cpp, which carries the reasoning behind each step;
-// SPEC.md's fixes are marked FIX n, work skipping that cannot change the
+// native/src/cpu/march_seed.cpp, which carries the reasoning behind each step;
+// The fixes of docs/conventions.md are marked FIX n, work skipping that cannot change the
 // result SKIP. Output: (u, v, visibility, visibility).
 #include "common.glsl"
 #include "fragment.glsl"

@@ -1,50 +1,20 @@
-// The seed chapter's two-pass march ("seed") and the book's older linear
-// march ("linear"), ported to Blender's camera space (view distance = -z).
-// The only departures from the seed are SPEC.md's four fixes, each marked
-// FIX n below, plus work skipping that cannot change the result (marked SKIP).
-#include "march.h"
-
+// The seed chapter's two-pass march ("seed"), ported to Blender's camera
+// space (view distance = -z). The only departures from the seed are the four
+// fixes of docs/conventions.md, each marked FIX n below, plus work skipping
+// that cannot change the result (marked SKIP). Its GL form is trace_seed.frag
+// beside this file; its row of the table of marches is at the end.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
+#include "cpu/march.h"
+#include "cpu/ray.h"
+#include "glint/marches.h"
 #include "parallel.h"
-#include "ray.h"
-#include "trace.h"
 
 namespace glint::cpu {
 namespace {
-
-// FIX 3: nearest texel at floor(uv * size); outside the image or on an
-// unseen texel is a miss. Returns the texel's index (or -1 on a miss) and
-// its view distance (0 on a miss: the seed's cleared texel).
-inline long fetch_texel(const MarchSetup& s, float u, float v, float& scene_vd) {
-  const Image& pos = *s.position;
-  const float fx = std::floor(u * static_cast<float>(pos.width));
-  const float fy = std::floor(v * static_cast<float>(pos.height));
-  if (fx >= 0.0f && fx < static_cast<float>(pos.width) && fy >= 0.0f &&
-      fy < static_cast<float>(pos.height)) {
-    const long i = static_cast<long>(fy) * pos.width + static_cast<long>(fx);
-    const float vd = s.view_distance[i];
-    if (vd == vd) {
-      scene_vd = vd;
-      return i;
-    }
-  }
-  scene_vd = 0.0f;
-  return -1;
-}
-
-// The full texel behind a fetch, (0, 0, 0, 0) for a miss.
-inline void texel_at(const MarchSetup& s, long i, float out[4]) {
-  if (i < 0) {
-    out[0] = out[1] = out[2] = out[3] = 0.0f;
-    return;
-  }
-  const float* p = s.position->data.data() + static_cast<size_t>(i) * 4;
-  out[0] = p[0]; out[1] = p[1]; out[2] = p[2]; out[3] = p[3];
-}
 
 // SKIP: the range of first-pass sample indices k (1..n) whose sample can lie
 // on the image. Samples off the image are misses (FIX 3), and a straight line
@@ -80,33 +50,8 @@ void onscreen_range(double sx, double sy, double ix, double iy, int64_t n, doubl
   if (k1 > n) k1 = n;
 }
 
-}  // namespace
-
-void fill_view_distance(const Image& position, int y, float* out) {
-  for (int x = 0; x < position.width; ++x) {
-    const float* p = position.px(x, y);
-    out[x] = texel_seen(p) ? view_distance({p[0], p[1], p[2]}) : std::numeric_limits<float>::quiet_NaN();
-  }
-}
-
-MarchSetup make_setup(const Image& position, const Image& normal, const Mat4& projection,
-                      const TraceOptions& opt, const float* view_distance) {
-  MarchSetup s;
-  s.position = &position;
-  s.normal = &normal;
-  s.view_distance = view_distance;
-  for (int i = 0; i < 16; ++i) {
-    s.projd[i] = projection.m[i];
-    s.proj[i] = static_cast<float>(projection.m[i]);
-  }
-  s.kind = classify_projection(projection);
-  s.opt = opt;
-  const CameraEye ce = camera_eye(projection);
-  s.eye_kind = ce.kind;
-  for (int k = 0; k < 3; ++k) s.eye[k] = ce.eye[k];
-  return s;
-}
-
+// Writes (u, v, visibility, visibility) for pixel (x, y); (0, 0, 0, 0) where
+// nothing was seen, the normal is zero, or the ray cannot be projected.
 void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
   out[0] = out[1] = out[2] = out[3] = 0.0f;
   V3 from, unit_from, normal;
@@ -268,96 +213,27 @@ void march_seed(const MarchSetup& s, int x, int y, float out[4]) {
   out[3] = visibility;
 }
 
-void march_linear(const MarchSetup& s, int x, int y, float out[4]) {
-  out[0] = out[1] = out[2] = out[3] = 0.0f;
-  V3 from, unit_from, normal;
-  if (!read_origin(s, x, y, from, unit_from, normal)) return;
-  const int steps = s.opt.steps;
-  if (steps <= 0) return;
-
-  const V3 reflection = normalize(reflect(unit_from, normal));
-  if (!finite(reflection)) return;
-  const float thickness = s.opt.thickness;
-  float max_distance = s.opt.max_distance;
-  float step_size = max_distance / static_cast<float>(steps);
-  float count = 1.0f;
-
-  for (int i = 0; i < steps; ++i) {
-    const float distance = count * step_size;
-    if (distance > max_distance) break;
-    const V3 sample = from + reflection * distance;
-    float c[4];
-    clip_of(s.proj, sample, c);
-    // A sample behind the eye (w <= 0) is outside the frustum too: without
-    // this test its divided coordinates would flip sign and look inside.
-    if (!(c[3] > 0.0f)) break;
-    const float ox = c[0] / c[3] * 0.5f + 0.5f;
-    const float oy = c[1] / c[3] * 0.5f + 0.5f;
-    const float oz = c[2] / c[3];
-    if (!(ox >= 0.0f && oy >= 0.0f && oz >= -1.0f && ox <= 1.0f && oy <= 1.0f && oz <= 1.0f)) break;
-
-    float scene_vd;
-    const bool seen = fetch_texel(s, ox, oy, scene_vd) >= 0;
-    const float sample_vd = view_distance(sample);
-    if (seen && sample_vd >= scene_vd && sample_vd <= scene_vd + thickness) {
-      const float visibility = clamp01(1.0f - std::fmax(dot(reflection, unit_from * -1.0f), 0.0f));
-      // The book writes (u, v, visibility, 1); Glint's buffer contract is
-      // (u, v, visibility, visibility) for every march.
-      out[0] = ox;
-      out[1] = oy;
-      out[2] = visibility;
-      out[3] = visibility;
-      // Step back to the last miss and approach with smaller steps, exactly
-      // as the book does (the restart distance is count * new step size).
-      count -= 1.0f;
-      max_distance = distance;
-      const float previous_distance = count * step_size;
-      const float steps_left = std::fmax(static_cast<float>(steps - i), 1.0f);
-      step_size = (max_distance - previous_distance) / steps_left;
-    } else {
-      count += 1.0f;
-    }
-  }
-}
-
-std::vector<float> view_distances(const Image& position, int threads) {
-  std::vector<float> vd(position.pixel_count());
-  parallel_rows(0, position.height, threads, [&](int y) {
-    fill_view_distance(position, y, vd.data() + static_cast<size_t>(y) * position.width);
-  });
-  return vd;
-}
-
-namespace {
-
-// The seed and the linear march share everything but the per-pixel march.
-template <class PerPixel>
-Image trace_pixels(const TraceInputs& in, const TraceOptions& opt, int threads, PerPixel&& march) {
-  Image out = Image::uninitialized(in.position.width, in.position.height);  // each march writes its pixel
-  const std::vector<float> vd = view_distances(in.position, threads);
-  const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, vd.data());
-  const Image* spec = in.specular;
-  parallel_rows(0, out.height, threads, [&](int y) {
-    for (int x = 0; x < out.width; ++x) {
-      float* o = out.px(x, y);
-      if (spec && !is_reflective(spec->px(x, y))) {  // the seed returns early here
-        o[0] = o[1] = o[2] = o[3] = 0.0f;
-        continue;
-      }
-      march(setup, x, y, o);
-    }
-  });
-  return out;
-}
-
-}  // namespace
-
 Image trace_seed(const TraceInputs& in, const TraceOptions& opt, int threads) {
   return trace_pixels(in, opt, threads, march_seed);
 }
 
-Image trace_linear(const TraceInputs& in, const TraceOptions& opt, int threads) {
-  return trace_pixels(in, opt, threads, march_linear);
+}  // namespace
+}  // namespace glint::cpu
+
+namespace glint {
+
+MarchInfo glint_march_seed() {
+  MarchInfo m;
+  m.name = "seed";
+  m.description = "The seed chapter's two-pass march: a coarse pass over a share of the pixels, then bisection";
+  m.knobs = {{"max_distance", "length of the reflected ray, view units; also fades the reflection"},
+             {"resolution", "share of the pixels the ray crosses on screen that the coarse pass visits"},
+             {"steps", "bisection iterations after the first coarse hit"},
+             {"thickness", "how far behind the depth buffer a sample still counts as a hit, view units"}};
+  m.scratch_per_pixel = 4;  // one float view distance per texel
+  m.cpu = &cpu::trace_seed;
+  m.gl_program = "trace_seed.frag";
+  return m;
 }
 
-}  // namespace glint::cpu
+}  // namespace glint

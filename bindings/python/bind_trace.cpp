@@ -1,0 +1,224 @@
+// glint_core.trace and composite_layers (one trace request each), and the
+// tables of marches and presets they take their names from.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <optional>
+
+#include "bind.h"
+#include "convert.h"
+#include "glint/backend.h"
+#include "glint/composite.h"
+#include "glint/errors.h"
+#include "glint/marches.h"
+#include "glint/memory.h"
+#include "glint/mesh.h"
+#include "glint/presets.h"
+#include "glint/validation.h"
+
+using namespace pybind11::literals;
+
+namespace glint::py {
+
+TraceOptions trace_options(float max_distance, float resolution, int steps, float thickness,
+                           const std::string& march, const std::string& blocked, double memory_limit_mb) {
+  TraceOptions o;
+  o.memory_limit_mb = memory_limit_mb;
+  o.max_distance = max_distance;
+  o.resolution = resolution;
+  o.steps = steps;
+  o.thickness = thickness;
+  o.march = parse_march(march);
+  o.blocked = parse_blocked(blocked);
+  validate(o);
+  return o;
+}
+
+// An optional image argument: None, or an array of the position buffer's size.
+std::optional<Image> optional_image(const pyb::handle& obj, const char* name, const Image& like) {
+  if (obj.is_none()) return std::nullopt;
+  Image img = image_from_array(obj, name, 1.0f, 4);
+  require_same_size(like, "position", img, name);
+  return img;
+}
+
+namespace {
+
+// One trace request's arguments, converted and checked: what trace() and
+// composite_layers() share.
+struct TraceCall {
+  Image pos, nrm;
+  Mat4 proj;
+  TraceOptions opt;
+  std::optional<Image> back, spec;
+  std::optional<TriangleMesh> tris;
+  std::shared_ptr<Backend> be;
+  TraceInputs inputs() const {
+    TraceInputs in{pos, nrm, spec ? &*spec : nullptr, proj};
+    in.back_position = back ? &*back : nullptr;
+    in.mesh = tris ? &*tris : nullptr;
+    return in;
+  }
+};
+
+TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::handle& normal,
+                     const pyb::handle& projection, float max_distance, float resolution, int steps,
+                     float thickness, const std::string& march, const std::string& blocked,
+                     const pyb::handle& back_position, const pyb::handle& mesh, const pyb::handle& specular,
+                     const std::string& backend, int threads, double memory_limit_mb, int outputs) {
+  // Before any copy: a 32768x32768 request must be refused with the memory still free.
+  if (auto [w, h] = array_size(position); w > 0) {
+    const uint64_t px = uint64_t(w) * uint64_t(h);
+    const int copies = 2 + (back_position.is_none() ? 0 : 1) + (specular.is_none() ? 0 : 1);
+    require_memory(binding_bytes(px, copies, outputs) +
+                       trace_bytes(w, h, march_info(march).id, backend != "cpu"),
+                   std::string(what) + " at " + std::to_string(w) + "x" + std::to_string(h), memory_limit_mb);
+  }
+  TraceCall c;
+  c.pos = image_from_array(position, "position", 1.0f, 4);
+  c.nrm = image_from_array(normal, "normal", 0.0f, 3);
+  require_same_size(c.pos, "position", c.nrm, "normal");
+  c.proj = projection_from_array(projection);
+  c.opt = trace_options(max_distance, resolution, steps, thickness, march, blocked, memory_limit_mb);
+  c.back = optional_image(back_position, "back_position", c.pos);
+  c.spec = optional_image(specular, "specular", c.pos);
+  c.tris = mesh_from_arg(mesh);
+  c.be = get_backend(backend, threads);
+  return c;
+}
+
+pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& normal,
+                             const pyb::handle& projection, float max_distance, float resolution,
+                             int steps, float thickness, const std::string& march,
+                             const std::string& blocked, const pyb::handle& back_position,
+                             const pyb::handle& mesh, const pyb::handle& specular, const std::string& backend,
+                             int threads, double memory_limit_mb) {
+  const TraceCall c = trace_call("trace", position, normal, projection, max_distance, resolution, steps,
+                                 thickness, march, blocked, back_position, mesh, specular, backend, threads,
+                                 memory_limit_mb, 1);
+  Image uv;
+  {
+    pyb::gil_scoped_release release;
+    uv = c.be->trace(c.inputs(), c.opt);
+  }
+  return array_from_image(std::move(uv));
+}
+
+pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& normal,
+                              const pyb::handle& specular, const pyb::handle& projection, float max_distance,
+                              float resolution, int steps, float thickness, const std::string& march,
+                              const std::string& blocked, const pyb::handle& back_position,
+                              const pyb::handle& mesh, const std::string& backend, int threads,
+                              double memory_limit_mb) {
+  if (specular.is_none()) throw InvalidArgument("specular", "expected a float32 [H, W, 4] array, got None");
+  const TraceCall c = trace_call("composite_layers", position, normal, projection, max_distance, resolution,
+                                 steps, thickness, march, blocked, back_position, mesh, specular, backend,
+                                 threads, memory_limit_mb, 2);
+  CompositeLayers layers;
+  {
+    pyb::gil_scoped_release release;
+    layers = composite_layers(*c.be, c.inputs(), c.opt, threads);
+  }
+  pyb::dict out;
+  out["uv"] = array_from_image(std::move(layers.uv));
+  out["weight"] = array_from_image(std::move(layers.weight));
+  out["reflective_pixels"] = layers.reflective_pixels;
+  out["any_rough"] = layers.any_rough;
+  return out;
+}
+
+pyb::dict py_marches() {
+  pyb::dict out;
+  for (const MarchInfo& m : march_table()) out[m.name] = m.description;
+  return out;
+}
+
+pyb::dict py_march_details() {
+  pyb::dict out;
+  for (const MarchInfo& m : march_table()) {
+    pyb::dict knobs;
+    for (const MarchKnob& k : m.knobs) knobs[k.option] = k.meaning;
+    out[m.name] = pyb::dict("description"_a = m.description, "options"_a = knobs,
+                            "needs_mesh"_a = m.needs_mesh,
+                            "uses_back_position"_a = m.uses_back_position,
+                            "gl"_a = m.gl_program != nullptr);
+  }
+  return out;
+}
+
+pyb::dict trace_kwargs(const TraceOptions& o) {
+  return pyb::dict("max_distance"_a = o.max_distance, "resolution"_a = o.resolution,
+                   "steps"_a = o.steps, "thickness"_a = o.thickness,
+                   "march"_a = march_info(o.march).name);
+}
+
+pyb::dict py_presets() {
+  pyb::dict out;
+  for (const Preset& p : presets()) out[p.name] = trace_kwargs(p.trace);
+  return out;
+}
+
+pyb::dict py_preset_descriptions() {
+  pyb::dict out;
+  for (const Preset& p : presets()) out[p.name] = p.description;
+  return out;
+}
+
+}  // namespace
+
+void bind_trace(pyb::module_& m) {
+  namespace s = schema;
+  const TraceOptions t;
+  m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
+        "max_distance"_a = t.max_distance, "resolution"_a = t.resolution, "steps"_a = t.steps,
+        "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "blocked"_a = to_string(t.blocked),
+        "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "specular"_a = pyb::none(),
+        "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
+        "memory_limit_mb"_a = t.memory_limit_mb,
+        doc_with_options(
+            "Reflected-UV buffer (u, v, visibility, visibility) as float32 [H, W, 4].\n"
+            "back_position: optional float32 [H, W, 4], the surface behind each pixel (w = 0 where\n"
+            "none), read by marches that use true thickness. mesh: (vertices float32 [N, 3],\n"
+            "triangles int32 [M, 3]) in the same view space, for marches that trace the scene's\n"
+            "triangles ('exact').\n"
+            "specular: optional float32 [H, W, 4], the specular buffer: pixels that do not reflect\n"
+            "(mean rgb 0) are not traced and report 0, as pipeline() does; their normals still\n"
+            "serve the rays that hit them.\n"
+            "blocked='occluder' gives (u, v, weight, 0) at what hides the hit (docs/marches.md).\n"
+            "A request over memory_limit_mb raises MemoryLimitExceeded (a MemoryError).",
+            {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::blocked, &s::backend,
+             &s::threads, &s::memory_limit_mb}));
+  m.def("composite_layers", &py_composite_layers, "position"_a, "normal"_a, "specular"_a, "projection"_a,
+        pyb::kw_only(), "max_distance"_a = t.max_distance, "resolution"_a = t.resolution, "steps"_a = t.steps,
+        "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "blocked"_a = to_string(t.blocked),
+        "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "backend"_a = s::backend.initial_name,
+        "threads"_a = s::threads.initial_int(), "memory_limit_mb"_a = t.memory_limit_mb,
+        "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
+        "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, 1) from trace(), the uv\n"
+        "of misses within 2 pixels of a hit continued from the hits; 'weight': float32 [H, W, 4], rgb\n"
+        "specular_weight(), a cone_lod(); 'reflective_pixels': pixels traced; 'any_rough': some lod > 0}.\n"
+        "Trace keywords as trace(); nothing is traced when no pixel reflects.");
+  m.def(
+      "continue_missing_uv",
+      [](const pyb::handle& uv, int rings) {
+        if (rings < 0) throw InvalidArgument("rings", "expected 0 or more, got " + std::to_string(rings));
+        Image u = image_from_array(uv, "uv", 0.0f, 4);
+        {
+          pyb::gil_scoped_release release;
+          continue_missing_uv(u, rings);
+        }
+        return array_from_image(std::move(u));
+      },
+      "uv"_a, "rings"_a = 2,
+      "A copy of uv (u, v, vis, _) where `rings` rings of misses (vis <= 0) around the hits take\n"
+      "the mean uv of their hit (or earlier-ring) 3x3 neighbours; vis and the 4th channel unchanged.\n"
+      "What composite_layers() does to its uv image.");
+  m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");
+  m.def("march_details", &py_march_details,
+        "{name: {description, options: {keyword: meaning}, needs_mesh, uses_back_position, gl}}.");
+  m.def("presets", &py_presets, "{name: trace() keyword arguments} of every preset.");
+  m.def("preset_descriptions", &py_preset_descriptions, "{name: one line on what it measured}.");
+}
+
+}  // namespace glint::py

@@ -1,0 +1,24 @@
+// The "exact" march's row of the table of marches. Its code is
+// native/src/cpu/march_exact.cpp (Embree), to move here once the work on it
+// has merged; it has no GL form.
+#include "cpu/trace.h"
+#include "glint/marches.h"
+
+namespace glint {
+
+MarchInfo glint_march_exact() {
+  MarchInfo m;
+  m.name = "exact";
+  m.description =
+      "The ground truth: each pixel's mirror ray traced against the scene's triangles (Embree), "
+      "reported where the camera sees the hit; runs on the CPU whatever the backend";
+  m.knobs = {{"max_distance", "length of the reflected ray, view units: the first hit within it counts"}};
+  m.needs_mesh = true;
+  // Each triangle copied into Embree (48 bytes) with its plane (32), and
+  // Embree's BVH about 4 node bytes per triangle more (robust, medium).
+  m.scratch_per_triangle = 320;
+  m.cpu = &cpu::trace_exact;
+  return m;
+}
+
+}  // namespace glint

@@ -1,0 +1,38 @@
+// The "hiz" march's row of the table of marches. Its code is not in this
+// folder yet: the CPU walk is native/src/cpu/march_hiz.cpp and hiz_planes.cpp,
+// its GL passes shaders/hiz_*.glsl, hiz_*.frag, trace_hiz*.{frag,comp} and
+// GlState::build_pyramid / trace_reusing (native/src/gl/passes.cpp). They
+// move here once the work on the walk's speed has merged.
+#include "cpu/trace.h"
+#include "glint/marches.h"
+
+namespace glint {
+
+MarchInfo glint_march_hiz() {
+  MarchInfo m;
+  m.name = "hiz";
+  m.description =
+      "Min/max depth pyramid walk: skips empty space cell by cell, hits where the ray's depth span "
+      "meets a surface, never skips a depth interval";
+  m.knobs = {{"max_distance", "length of the reflected ray, view units"},
+             {"resolution",
+              "0.5 or below: rays of every other pixel of every other row first, and each other pixel's "
+              "only where the traced pixels around it disagree (else it takes their hit, or their miss); "
+              "above 0.5: every pixel's ray"},
+             {"steps", "walk budget per ray, in cells per pyramid level (steps x levels cells at most)"},
+             {"thickness",
+              "how far behind a surface is solid (a ray there is blocked), view units, where no "
+              "back_position gives the real depth"},
+             {"blocked",
+              "what a blocked ray reports: 'miss' nothing; 'occluder' the uv of what hides its hit, "
+              "(u, v, weight, 0): the colour stages show it, the 4th channel says no hit was found"}};
+  // The pyramid: 2 floats per cell, 4/3 cells per texel, rounded up; the
+  // plane normals 3 floats per texel.
+  m.scratch_per_pixel = 28;
+  m.uses_back_position = true;
+  m.cpu = &cpu::trace_hiz;
+  m.gl_program = "trace_hiz.frag";
+  return m;
+}
+
+}  // namespace glint
