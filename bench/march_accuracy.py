@@ -81,6 +81,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cache", default=os.path.join(HERE, "..", "build", "bench-cache"),
                     help="where exact G-buffers are kept between runs ('' for none)")
+    ap.add_argument("--only", default="",
+                    help="comma-separated rows to run (e.g. 'seed (defaults),balanced'); '' for all")
     ap.add_argument("--cost", action="store_true",
                     help="instead: time of the seed and the balanced preset against max_distance "
                          "and image size on the floor scene")
@@ -93,6 +95,9 @@ def main():
             runs.append((name, kw, False))
             if glint_core.march_details()[kw["march"]]["uses_back_position"]:
                 runs.append((name + " + back layer", kw, True))
+    if args.only:
+        keep = set(args.only.split(","))
+        runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep]  # the seed's row is the ratios' base
     print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |")
     print("|---|---|---|---|---|---|---|---|")
     for size in args.sizes.split(","):

@@ -1,6 +1,7 @@
 // The "hiz" march's walk: the Hi-Z pyramid (hiz_base.frag, hiz_reduce.frag)
 // walked cell by cell along the reflected ray's screen-space line. A port of
-// march_hiz() in native/src/cpu/march_hiz.cpp, which explains each step;
+// hiz_walk_scalar() in native/src/cpu/hiz_walk.cpp (the walk, which explains
+// each step) and of native/src/cpu/march_hiz.cpp (the ray, the texel test);
 // same operations in the same order. trace_pixel() returns (u, v, visibility,
 // visibility) at a hit (its confidence times the fade at the screen's edge),
 // with u_blocked an occluder's (u, v, fade, 0), else 0. Apart from
@@ -56,7 +57,7 @@ float ray_exit(ivec4 box) {
   return te;
 }
 
-// Ray::left_levels() in march_hiz.cpp: bits 0..m for the largest level m
+// `left` in hiz_walk_scalar() (hiz_walk.cpp): bits 0..m for the largest level m
 // whose cells the sides of box crossed at te bound (b ^ (b - 1) for a side at
 // b: bits 0..ctz(b), all for 0); 0 when te is no side's.
 uint left_levels(ivec4 box, float te) {
@@ -208,7 +209,8 @@ float hit_visibility(float u, float v, bool certain) {
   return vis;
 }
 
-// march_hiz(): the pixel's own ray walked to its hit.
+// hiz_walk_scalar() and queue_texel() (march_hiz.cpp): the pixel's own ray
+// walked to its hit.
 vec4 trace_pixel(ivec2 origin) {
   if (!make_ray(origin)) return vec4(0.0);
   int top = u_levels - 1;
@@ -218,7 +220,7 @@ vec4 trace_pixel(ivec2 origin) {
   float bt = ray_b(t);
   int level = 0;
   // Bit l: the cell of level l the ray is in is known to overlap it
-  // (march_hiz() says why).
+  // (hiz_walk_scalar() says why).
   uint known = 0u;
   int it = 0;
   bool hit = false;

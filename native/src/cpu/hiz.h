@@ -1,5 +1,5 @@
-// The "hiz" march's pyramid and per-ray walk, on the CPU. The GL backend runs
-// the same steps in shaders/hiz_base.frag, hiz_reduce.frag and
+// The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's). The GL
+// backend runs the same steps in shaders/hiz_base.frag, hiz_reduce.frag and
 // trace_hiz.frag; docs/marches.md explains the method.
 #pragma once
 #include <cstddef>
@@ -8,17 +8,18 @@
 #include "glint/image.h"
 #include "glint/options.h"
 #include "glint/projection.h"
+#include "glint/stages.h"
+#include "hiz_walk.h"
 
 namespace glint::cpu {
 
 // Level sizes follow OpenGL's mip rule, floor(size / 2) and at least 1, so
 // that the CPU and GL pyramids have the same cells. The last cell of a row or
-// column covers what an odd size leaves over (see cell_bounds()).
+// column covers what an odd size leaves over (hiz_walk_scalar()).
 struct HizPyramid {
   int levels = 0;
   std::vector<int> width, height;
   std::vector<size_t> offset;  // first cell of each level, in cells
-  std::vector<float> scale;    // 1 / 2^level: pixels to cells, exactly
   // Two floats per cell: the nearest view distance of any surface in it
   // (over each texel's whole footprint, not only its centre), and the
   // farthest view distance its surfaces reach once their thickness is added.
@@ -80,12 +81,8 @@ void hiz_plane_normals_row(const Image& position, const Image& normal, const See
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes);
 
-// Cell (i, j) of `level` covers pixels [x0, x1) x [y0, y1).
-inline void cell_bounds(const HizPyramid& p, int level, int i, int j, int out[4]) {
-  out[0] = i << level;
-  out[1] = j << level;
-  out[2] = i == p.width[level] - 1 ? p.width[0] : (i + 1) << level;
-  out[3] = j == p.height[level] - 1 ? p.height[0] : (j + 1) << level;
-}
+// trace_hiz() (trace.h) with the given walk, which must be available: the
+// tests hold the walks to the same answers.
+Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, WalkIsa isa);
 
 }  // namespace glint::cpu

@@ -9,7 +9,9 @@
 // [depth(t_in), depth(t_out)] (depth is monotonic along a line in screen
 // space), and the cell is entered only if that span meets the cell's
 // [nearest surface, farthest surface + thickness]. Empty space is skipped a
-// whole cell at a time and no interval of depth is ever jumped over.
+// whole cell at a time and no interval of depth is ever jumped over. The walk
+// itself is hiz_walk.cpp's (eight rays at once on AVX2); this file makes each
+// ray, builds the pyramid and tests the texels the walk stops at.
 //
 // At a texel the surface is the texel's tangent plane (its position and
 // geometric normal, hiz_plane_normals_row()), not a flat depth: its depth range covers the texel's footprint, so
@@ -21,6 +23,7 @@
 #include <cmath>
 #include <limits>
 
+#include "glint/errors.h"
 #include "glint/marches.h"
 #include "glint/schema.h"
 #include "glint/stages.h"
@@ -159,20 +162,6 @@ struct Ray {
       te = std::min(te, (static_cast<float>(d[1] > 0.0f ? box[3] : box[1]) - f0[1]) * inv[1]);
     return te;
   }
-  // The levels whose cell the line leaves at te, where exit(box) gave te: a
-  // side of box at pixel coordinate b bounds the cells of every level m with
-  // 2^m dividing b (0: the image's edge, all of them), and b ^ (b - 1) has
-  // bits 0..ctz(b) set (all for 0). Bits 0..m, for the largest such m of the
-  // sides crossed at te; 0 when te is no side's.
-  unsigned left_levels(const int box[4], float te) const {
-    unsigned left = 0;
-    for (int a = 0; a < 2; ++a) {
-      if (d[a] == 0.0f) continue;
-      const int b = d[a] > 0.0f ? box[2 + a] : box[a];
-      if ((static_cast<float>(b) - f0[a]) * inv[a] == te) left |= static_cast<unsigned>(b ^ (b - 1));
-    }
-    return left;
-  }
 };
 
 bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
@@ -209,16 +198,6 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
   r.t_end = 1.0f;
   r.t_end = r.exit(image);
   return r.t_end > 0.0f;
-}
-
-// The cell of `level` that the line occupies just after fraction t.
-inline void cell_at(const HizPyramid& p, const Ray& r, int level, float t, int& i, int& j) {
-  const float px = r.f0[0] + t * r.d[0] + r.nudge[0], py = r.f0[1] + t * r.d[1] + r.nudge[1];
-  // Truncation is floor for the non-negative values that reach it.
-  const float sx = px * p.scale[level], sy = py * p.scale[level];
-  const int wl = p.width[level], hl = p.height[level];
-  i = !(sx > 0.0f) ? 0 : (sx >= static_cast<float>(wl) ? wl - 1 : static_cast<int>(sx));
-  j = !(sy > 0.0f) ? 0 : (sy >= static_cast<float>(hl) ? hl - 1 : static_cast<int>(sy));
 }
 
 // What a texel does to the ray between fractions ta and tb.
@@ -304,91 +283,78 @@ inline float hit_visibility(float u, float v, bool certain) {
   return (certain ? 1.0f : kUncertain) * fade;
 }
 
-void march_hiz(const MarchSetup& s, const HizPlanes& planes, const HizPyramid& pyr, const HizCamera& cam,
-               const Image* back, int x, int y, float out[4]) {
-  out[0] = out[1] = out[2] = out[3] = 0.0f;
-  Ray r;
-  if (!make_ray(s, x, y, r)) return;
-  const Image& pos = *s.position;
-  const int top = pyr.levels - 1;
-  const long budget = static_cast<long>(s.opt.steps) * pyr.levels;
+// A queue of pixels for hiz_walk() to trace, and the scalar parts of their
+// walks: each ray's set-up, and the texel test where a lane's walk stops at
+// level 0. `start` answers every pixel it takes: with a neighbour's result
+// (`reuse`), or a miss that the walk's hit overwrites.
+struct PixelQueue {
+  const TraceInputs& in;
+  const MarchSetup& s;
+  const HizPlanes& planes;
+  const HizCamera& cam;
+  Image& out;
+  int y = 0, x = 0, x_end = 0, x_step = 1;  // pixels (x, y), (x + x_step, y), ... before x_end
+  bool reuse = false;  // answer from the traced neighbours where they agree (reuse_at())
+  Ray ray[kWalkLanes] = {};
+  int px[kWalkLanes][2] = {};
+};
 
-  // Leave the origin's own texel first: the ray starts on its surface.
-  int box[4] = {x, y, x + 1, y + 1};
-  float t = r.exit(box);
-  float nt = r.num(t), bt = r.b(t);
-  int level = 0;
-  // Bit l of `known`: the cell of level l that the ray is in is known to
-  // overlap it (it was the reason to go down a level). While the ray is
-  // still inside such a cell, passing a cell below it is no reason to go
-  // back up: the cell above would be tested again over what is left of the
-  // same span and overlap again, most of the time (a ray skimming a floor
-  // went up and straight back down on 7 of its 27 steps). Which texels are
-  // tested does not change, only the steps to reach them, so fewer rays run
-  // out of their budget. A mask, not the cells' exits: the GL walk pays
-  // dearly for an array indexed by level.
-  unsigned known = 0;
-  for (long it = 0; it < budget && t < r.t_end; ++it) {
-    int i, j;
-    cell_at(pyr, r, level, t, i, j);
-    cell_bounds(pyr, level, i, j, box);
-    float te = r.exit(box);
-    if (!(te > t)) te = std::nextafter(t, kInf);  // always move on
-    const float ne = r.num(te), be = r.b(te);
-    const float* c = pyr.cell(level, i, j);
-    // The depth span [min, max] of the two ends meets [c0, c1].
-    if ((nt >= c[0] * bt || ne >= c[0] * be) && (nt <= c[1] * bt || ne <= c[1] * be)) {
-      if (level > 0) {
-        known |= 1u << level;
-        --level;  // something in this cell may meet the ray: look closer
-        if (level == 0) {
-          // Its texels' planes and positions are what a texel test reads next,
-          // from far in memory: ask for both of its rows now. Loads only.
-          const int x0 = std::min(2 * i, pos.width - 1), y0 = std::min(2 * j, pos.height - 1);
-          const int y1 = std::min(y0 + 1, pos.height - 1);
-          __builtin_prefetch(planes.px(x0, y0));
-          __builtin_prefetch(planes.px(x0, y1));
-          __builtin_prefetch(pos.px(x0, y0));
-          __builtin_prefetch(pos.px(x0, y1));
-          __builtin_prefetch(pyr.cell(0, x0, y1));
-        }
-        continue;
-      }
-      float th;
-      bool located;
-      const TexelOutcome hit = texel_hit(s, planes, cam, back, r, i, j, t, te, th, located);
-      if (hit == TexelOutcome::Blocked) {
-        // What hides the hit: the colour stages may show it in place of the
-        // sky (docs/marches.md, "Blocked rays"). The texel's centre, not where
-        // the ray entered it: a bilinear read on its edge would mix in the
-        // texel beside it, often another object.
-        if (s.opt.blocked != Blocked::Occluder) return;
-        const float u = (static_cast<float>(i) + 0.5f) / static_cast<float>(pos.width);
-        const float v = (static_cast<float>(j) + 0.5f) / static_cast<float>(pos.height);
-        out[0] = u;
-        out[1] = v;
-        out[2] = hit_visibility(u, v, true);
-        return;
-      }
-      if (hit == TexelOutcome::Hit) {
-        const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
-        const float v = (r.f0[1] + th * r.d[1]) / static_cast<float>(pos.height);
-        if (!finite(u) || !finite(v)) return;
-        const bool certain = located && !on_outline(pos, planes, back, s.opt.thickness, i, j);
-        out[0] = u;
-        out[1] = v;
-        out[2] = out[3] = hit_visibility(u, v, certain);
-        return;
-      }
-    }
-    t = te;
-    nt = ne;
-    bt = be;
-    // Empty so far: try a bigger stride, unless still inside a cell above
-    // that is known to overlap.
-    known &= ~r.left_levels(box, te);
-    if (level < top && !((known >> (level + 1)) & 1u)) ++level;
+bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4]);
+
+bool queue_start(void* ctx, int lane, WalkRay& w) {
+  PixelQueue& q = *static_cast<PixelQueue*>(ctx);
+  while (q.x < q.x_end) {
+    const int x = q.x, y = q.y;
+    q.x += q.x_step;
+    float* o = q.out.px(x, y);
+    if (q.reuse && reuse_at(q.in, q.out, x, y, o)) continue;
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    if (q.in.specular && !is_reflective(q.in.specular->px(x, y))) continue;
+    Ray& r = q.ray[lane];
+    if (!make_ray(q.s, x, y, r)) continue;
+    q.px[lane][0] = x;
+    q.px[lane][1] = y;
+    // Leave the origin's own texel first: the ray starts on its surface.
+    const int box[4] = {x, y, x + 1, y + 1};
+    const float t = r.exit(box);
+    w = WalkRay{{r.f0[0], r.f0[1]}, {r.d[0], r.d[1]}, {r.inv[0], r.inv[1]}, {r.nudge[0], r.nudge[1]},
+                r.a0[2], r.da[2], r.b0, r.db, r.t_end, t, r.num(t), r.b(t)};
+    return true;
   }
+  return false;
+}
+
+bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
+  PixelQueue& q = *static_cast<PixelQueue*>(ctx);
+  const Ray& r = q.ray[lane];
+  const Image& pos = *q.s.position;
+  const Image* back = q.in.back_position;
+  float th;
+  bool located;
+  const TexelOutcome hit = texel_hit(q.s, q.planes, q.cam, back, r, i, j, ta, tb, th, located);
+  if (hit == TexelOutcome::Pass) return true;
+  float* out = q.out.px(q.px[lane][0], q.px[lane][1]);
+  if (hit == TexelOutcome::Blocked) {
+    // What hides the hit: the colour stages may show it in place of the
+    // sky (docs/marches.md, "Blocked rays"). The texel's centre, not where
+    // the ray entered it: a bilinear read on its edge would mix in the
+    // texel beside it, often another object.
+    if (q.s.opt.blocked != Blocked::Occluder) return false;
+    const float u = (static_cast<float>(i) + 0.5f) / static_cast<float>(pos.width);
+    const float v = (static_cast<float>(j) + 0.5f) / static_cast<float>(pos.height);
+    out[0] = u;
+    out[1] = v;
+    out[2] = hit_visibility(u, v, true);
+    return false;
+  }
+  const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
+  const float v = (r.f0[1] + th * r.d[1]) / static_cast<float>(pos.height);
+  if (!finite(u) || !finite(v)) return false;
+  const bool certain = located && !on_outline(pos, q.planes, back, q.s.opt.thickness, i, j);
+  out[0] = u;
+  out[1] = v;
+  out[2] = out[3] = hit_visibility(u, v, certain);
+  return false;
 }
 
 }  // namespace
@@ -409,7 +375,6 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     p.width.push_back(w);
     p.height.push_back(h);
     p.offset.push_back(cells);
-    p.scale.push_back(1.0f / static_cast<float>(1 << p.scale.size()));
     cells += static_cast<size_t>(w) * h;
     if (w == 1 && h == 1) break;
     w = std::max(1, w / 2);
@@ -516,49 +481,76 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   return true;
 }
 
+// reuse_neighbours() for pixel (x, y) of the second pass, from the traced
+// pixels around it: the two beside it in its row (an even row), the two
+// above and below (an odd row, even column), or the four at its corners.
+bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4]) {
+  int q[4][2];
+  int k;
+  if (!(y & 1)) {
+    q[0][0] = x - 1, q[0][1] = y, q[1][0] = x + 1, q[1][1] = y, k = 2;
+  } else if (!(x & 1)) {
+    q[0][0] = x, q[0][1] = y - 1, q[1][0] = x, q[1][1] = y + 1, k = 2;
+  } else {
+    q[0][0] = x - 1, q[0][1] = y - 1, q[1][0] = x + 1, q[1][1] = y - 1;
+    q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1, k = 4;
+  }
+  return reuse_neighbours(in, out, x, y, q, k, o);
+}
+
 }  // namespace
 
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
-  Image out = Image::uninitialized(in.position.width, in.position.height);  // march_hiz writes each pixel
+  return trace_hiz(in, opt, threads, hiz_walk_default());
+}
+
+Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, WalkIsa isa) {
+  Image out = Image::uninitialized(in.position.width, in.position.height);  // the queues answer each pixel
   const HizCamera cam = hiz_camera(in.projection);
   HizPlanes planes;
   const HizPyramid pyr =
       build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads, planes);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
-  const Image* spec = in.specular;
-  auto trace_pixel = [&](int x, int y) {
-    float* o = out.px(x, y);
-    if (spec && !is_reflective(spec->px(x, y))) {
-      o[0] = o[1] = o[2] = o[3] = 0.0f;
-      return;
-    }
-    march_hiz(setup, planes, pyr, cam, in.back_position, x, y, o);
+  // The walk's kernels index cells with ints (a 46k x 46k image would not fit).
+  if (pyr.range.size() / 2 > static_cast<size_t>(std::numeric_limits<int>::max()))
+    throw InvalidArgument("position", "too large for the hiz march: more than 2^31 pyramid cells");
+  int offset[kMaxLevels];
+  for (int l = 0; l < pyr.levels; ++l) offset[l] = static_cast<int>(pyr.offset[l]);
+  WalkPyramid walk;
+  walk.levels = pyr.levels;
+  walk.width = in.position.width;
+  walk.height = in.position.height;
+  walk.range = pyr.range.data();
+  walk.offset = offset;
+  walk.texel[0] = planes.xyz.data();
+  walk.floats[0] = 3;
+  walk.texel[1] = in.position.data.data();
+  walk.floats[1] = 4;
+  // `steps` cells per level (kMaxSteps x kMaxLevels fits an int).
+  const int budget = static_cast<int>(std::min<long>(static_cast<long>(opt.steps) * pyr.levels,
+                                                     std::numeric_limits<int>::max()));
+  // One queue per row (or pass of a row), walked a kernel's lanes at a time.
+  auto walk_row = [&](int y, int x0, int step, bool reuse) {
+    PixelQueue q{in, setup, planes, cam, out};
+    q.y = y;
+    q.x = x0;
+    q.x_end = out.width;
+    q.x_step = step;
+    q.reuse = reuse;
+    WalkHost host;
+    host.ctx = &q;
+    host.start = queue_start;
+    host.texel = queue_texel;
+    hiz_walk(walk, host, budget, isa);
   };
   if (!hiz_reuses_rays(opt)) {
-    parallel_rows(0, out.height, threads, [&](int y) {
-      for (int x = 0; x < out.width; ++x) trace_pixel(x, y);
-    });
+    parallel_rows(0, out.height, threads, [&](int y) { walk_row(y, 0, 1, false); });
     return out;
   }
   // Every other pixel of every other row first; then the rest, from them.
-  parallel_rows(0, (out.height + 1) / 2, threads, [&](int j) {
-    for (int x = 0; x < out.width; x += 2) trace_pixel(x, 2 * j);
-  });
-  parallel_rows(0, out.height, threads, [&](int y) {
-    for (int x = (y & 1) ? 0 : 1; x < out.width; x += (y & 1) ? 1 : 2) {
-      int q[4][2];
-      int k;
-      if (!(y & 1)) {  // between two traced pixels of its row
-        q[0][0] = x - 1, q[0][1] = y, q[1][0] = x + 1, q[1][1] = y, k = 2;
-      } else if (!(x & 1)) {  // between two of its column
-        q[0][0] = x, q[0][1] = y - 1, q[1][0] = x, q[1][1] = y + 1, k = 2;
-      } else {  // at the centre of four
-        q[0][0] = x - 1, q[0][1] = y - 1, q[1][0] = x + 1, q[1][1] = y - 1;
-        q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1, k = 4;
-      }
-      if (!reuse_neighbours(in, out, x, y, q, k, out.px(x, y))) trace_pixel(x, y);
-    }
-  });
+  parallel_rows(0, (out.height + 1) / 2, threads, [&](int j) { walk_row(2 * j, 0, 2, false); });
+  parallel_rows(0, out.height, threads,
+                [&](int y) { walk_row(y, (y & 1) ? 0 : 1, (y & 1) ? 1 : 2, true); });
   return out;
 }
 
