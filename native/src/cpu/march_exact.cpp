@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -158,6 +159,105 @@ struct Query {
   double t = 0.0;  // where it met a surface, when found
 };
 
+// A query on its way through Embree, in the scene's frame.
+struct Live {
+  D3 origin;
+  float dir[3];
+  double scale;  // of the surface tolerance
+  double tnear;
+  uint32_t query;
+};
+
+// What a ray does about hits on its own surface.
+enum class Own {
+  // The mirror rays, one per pixel: a filter drops such hits inside the one
+  // traversal, which goes on to the next surface, and packets go through the
+  // BVH as one frustum (Embree's coherent mode). Half of the floor's rays meet
+  // their own triangle first, and asking again cost a second traversal each.
+  Skip,
+  // The rays back to the camera, one per reported hit: each such hit ends the
+  // traversal and the ray is asked again from just past it, eight times at
+  // most, one ray's traversal per packet lane, as Embree answers one ray.
+  Retry,
+};
+
+#if GLINT_EMBREE_MAJOR >= 4
+using QueryContext = RTCRayQueryContext;
+#else
+using QueryContext = RTCIntersectContext;
+#endif
+
+// Embree hands the context pointer of a query to its filter: the lanes'
+// origins ride behind it.
+struct SkipContext {
+  QueryContext base;
+  const Planes* planes;
+  const Live* lanes;  // indexed by the ray's id: its lane
+};
+
+void skip_own_surface(const RTCFilterFunctionNArguments* args) {
+  const auto* c = reinterpret_cast<const SkipContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    const Live& r = c->lanes[RTCRayN_id(args->ray, args->N, i)];
+    if (!(c->planes->distance(RTCHitN_primID(args->hit, args->N, i), r.origin) > kSurfaceTolerance * r.scale))
+      args->valid[i] = 0;
+  }
+}
+
+// Embree's packets of 8 (AVX) and 16 (AVX-512): the scene takes the widest
+// the processor runs natively.
+template <int K>
+struct Packet;
+template <>
+struct Packet<8> {
+  using RayHit = RTCRayHit8;
+#if GLINT_EMBREE_MAJOR >= 4
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectArguments* a) {
+    rtcIntersect8(valid, s, rh, a);
+  }
+#else
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
+    rtcIntersect8(valid, s, c, rh);
+  }
+#endif
+};
+template <>
+struct Packet<16> {
+  using RayHit = RTCRayHit16;
+#if GLINT_EMBREE_MAJOR >= 4
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectArguments* a) {
+    rtcIntersect16(valid, s, rh, a);
+  }
+#else
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
+    rtcIntersect16(valid, s, c, rh);
+  }
+#endif
+};
+
+template <int K>
+void intersect(const int* valid, RTCScene scene, typename Packet<K>::RayHit* rh, SkipContext* ctx, Own own) {
+#if GLINT_EMBREE_MAJOR >= 4
+  rtcInitRayQueryContext(&ctx->base);
+  RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  args.context = &ctx->base;
+  if (own == Own::Skip) {
+    args.flags = static_cast<RTCRayQueryFlags>(RTC_RAY_QUERY_FLAG_COHERENT | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
+    args.filter = &skip_own_surface;
+  }
+  Packet<K>::intersect(valid, scene, rh, &args);
+#else
+  rtcInitIntersectContext(&ctx->base);
+  if (own == Own::Skip) {
+    ctx->base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    ctx->base.filter = &skip_own_surface;
+  }
+  Packet<K>::intersect(valid, scene, rh, &ctx->base);
+#endif
+}
+
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
 }
@@ -200,6 +300,7 @@ class ExactScene::Impl {
       throw Error("glint: march \"exact\": Embree could not start (" + std::to_string(rtcGetDeviceError(nullptr)) +
                   ")");
     rtcSetDeviceErrorFunction(device_.get(), &on_device_error, &errors_);
+    wide_ = rtcGetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
   }
 
   // Callers hold `use` exclusively for these two. A build that fails leaves
@@ -209,8 +310,14 @@ class ExactScene::Impl {
     ScenePtr scene(rtcNewScene(device_.get()));
     GeometryPtr geometry;
     // DYNAMIC: without it Embree 3 throws a committed BVH away and builds anew
-    // even where every geometry asks for a refit.
-    rtcSetSceneFlags(scene.get(), static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC));
+    // even where every geometry asks for a refit. The filter flag lets the
+    // mirror rays' queries bring their own (Own::Skip).
+#if GLINT_EMBREE_MAJOR >= 4
+    constexpr auto kFilter = RTC_SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS;
+#else
+    constexpr auto kFilter = RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
+#endif
+    rtcSetSceneFlags(scene.get(), static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC | kFilter));
     // The two-level BVH: the only one whose geometries honour their own build
     // quality, REFIT among them. With one geometry its top level is the
     // geometry's BVH itself, so rays pay nothing for it.
@@ -284,11 +391,19 @@ class ExactScene::Impl {
 
   // For each query, the first hit along origin + t * dir (view space) for t
   // in [0, tfar] that is not on a surface through the origin itself.
-  void first_hits(const Frame& frame, std::vector<Query>& queries) const;
+  void first_hits(const Frame& frame, std::vector<Query>& queries, Own own) const {
+    if (wide_)
+      first_hits_k<16>(frame, queries, own);
+    else
+      first_hits_k<8>(frame, queries, own);
+  }
+  template <int K>
+  void first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const;
   // The mirror rays of row y, then the rays back to the camera from their hits.
   void trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y, Image& out) const;
 
   int threads_;
+  bool wide_ = false;         // packets of 16
   mutable ErrorSink errors_;  // before the device, which reports to it until released
   DevicePtr device_;
   ScenePtr scene_;
@@ -296,43 +411,68 @@ class ExactScene::Impl {
   Planes planes_;
 };
 
-void ExactScene::Impl::first_hits(const Frame& frame, std::vector<Query>& queries) const {
-  for (Query& q : queries) {
+template <int K>
+void ExactScene::Impl::first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const {
+  // Neighbouring pixels' rays go to Embree K at a time and share the BVH's
+  // upper levels. A packet is filled from the rays still looking, so a ray
+  // asked again (Own::Retry) waits for the next round instead of leaving its
+  // lane empty; each ray meets the same sequence of queries as if sent alone.
+  std::vector<Live> live, next;
+  live.reserve(queries.size());
+  for (uint32_t i = 0; i < queries.size(); ++i) {
+    Query& q = queries[i];
     q.found = false;
-    const D3 origin = frame.point(q.origin), dir = frame.direction(q.dir);
-    const double scale = std::max(norm(q.origin), norm(origin)) + 1e-30;
-    double tnear = 0.0;
-    // A handful of coplanar neighbours at most; past that the ray is skimming
-    // its own surface and reflects nothing.
-    for (int attempt = 0; attempt < 8; ++attempt) {
-      RTCRayHit rh;
-      rh.ray.org_x = float(origin.x), rh.ray.org_y = float(origin.y), rh.ray.org_z = float(origin.z);
-      rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
-      rh.ray.tnear = float(tnear);
-      rh.ray.tfar = float(q.tfar);
-      rh.ray.time = 0.0f;
-      rh.ray.mask = 0xFFFFFFFFu;
-      rh.ray.id = 0;
-      rh.ray.flags = 0;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-#if GLINT_EMBREE_MAJOR >= 4
-      rtcIntersect1(scene_.get(), &rh);  // Embree 4 folded the context into optional arguments
-#else
-      RTCIntersectContext ctx;
-      rtcInitIntersectContext(&ctx);
-      rtcIntersect1(scene_.get(), &ctx, &rh);
-#endif
-      if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-      if (planes_.distance(rh.hit.primID, origin) > kSurfaceTolerance * scale) {
-        q.found = true;
-        q.t = rh.ray.tfar;
-        break;
+    Live r;
+    r.origin = frame.point(q.origin);
+    const D3 dir = frame.direction(q.dir);
+    r.dir[0] = float(dir.x), r.dir[1] = float(dir.y), r.dir[2] = float(dir.z);
+    r.scale = std::max(norm(q.origin), norm(r.origin)) + 1e-30;
+    r.tnear = 0.0;
+    r.query = i;
+    live.push_back(r);
+  }
+  // A handful of coplanar neighbours at most; past that the ray is skimming
+  // its own surface and reflects nothing.
+  for (int attempt = 0; attempt < 8 && !live.empty(); ++attempt) {
+    next.clear();
+    for (size_t first = 0; first < live.size(); first += K) {
+      const size_t n = std::min<size_t>(K, live.size() - first);
+      alignas(64) typename Packet<K>::RayHit rh;
+      alignas(64) int valid[K];
+      for (size_t k = 0; k < size_t(K); ++k) {
+        valid[k] = k < n ? -1 : 0;
+        if (k >= n) continue;
+        const Live& r = live[first + k];
+        rh.ray.org_x[k] = float(r.origin.x), rh.ray.org_y[k] = float(r.origin.y), rh.ray.org_z[k] = float(r.origin.z);
+        rh.ray.dir_x[k] = r.dir[0], rh.ray.dir_y[k] = r.dir[1], rh.ray.dir_z[k] = r.dir[2];
+        rh.ray.tnear[k] = float(r.tnear);
+        rh.ray.tfar[k] = float(queries[r.query].tfar);
+        rh.ray.time[k] = 0.0f;
+        rh.ray.mask[k] = 0xFFFFFFFFu;
+        rh.ray.id[k] = static_cast<unsigned>(k);
+        rh.ray.flags[k] = 0;
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
       }
-      // Step just past this hit: the next float of t, scaled so that it moves.
-      tnear = std::nextafter(float(rh.ray.tfar), std::numeric_limits<float>::infinity());
-      if (!(tnear < q.tfar)) break;
+      SkipContext ctx;
+      ctx.planes = &planes_;
+      ctx.lanes = &live[first];
+      intersect<K>(valid, scene_.get(), &rh, &ctx, own);
+      for (size_t k = 0; k < n; ++k) {
+        Live& r = live[first + k];
+        Query& q = queries[r.query];
+        if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+        if (own == Own::Skip || planes_.distance(rh.hit.primID[k], r.origin) > kSurfaceTolerance * r.scale) {
+          q.found = true;
+          q.t = rh.ray.tfar[k];
+          continue;
+        }
+        // Step just past this hit: the next float of t, scaled so that it moves.
+        r.tnear = std::nextafter(rh.ray.tfar[k], std::numeric_limits<float>::infinity());
+        if (r.tnear < q.tfar) next.push_back(r);
+      }
     }
+    live.swap(next);
   }
 }
 
@@ -387,7 +527,7 @@ void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const 
     mirror.push_back(Query{d3(from), d3(pivot), s.opt.max_distance});
     mirror_x.push_back(x);
   }
-  first_hits(frame, mirror);
+  first_hits(frame, mirror, Own::Skip);
   for (size_t i = 0; i < mirror.size(); ++i) {
     const Query& q = mirror[i];
     if (!q.found) continue;
@@ -410,7 +550,7 @@ void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const 
     float* o = out.px(mirror_x[i], y);
     o[0] = float(u), o[1] = float(v), o[2] = o[3] = 1.0f;
   }
-  first_hits(frame, back);
+  first_hits(frame, back, Own::Retry);
   for (size_t i = 0; i < back.size(); ++i) {
     if (!back[i].found) continue;
     float* o = out.px(back_x[i], y);
