@@ -90,14 +90,21 @@ using GeometryPtr = std::unique_ptr<std::remove_pointer_t<RTCGeometry>, Geometry
 struct Planes {
   std::vector<double> n;  // unit normal (3) and offset (1) per triangle; 0 for degenerate ones
 
-  void compute(const float* vertices, const unsigned* triangles, size_t count, int threads) {
-    n.assign(count * 4, 0.0);
-    // A refit recomputes every plane: in blocks, on every core.
+  // Every plane, or where `moved` (a flag per vertex) is given, those of the
+  // triangles with a moved corner: a refit of one object's frame leaves the
+  // rest of a million planes as they were.
+  void compute(const float* vertices, const unsigned* triangles, size_t count, int threads,
+               const uint8_t* moved = nullptr) {
+    if (!moved) n.assign(count * 4, 0.0);
     constexpr size_t kBlock = 1 << 15;
     const int blocks = static_cast<int>((count + kBlock - 1) / kBlock);
     parallel_rows(0, blocks, threads, [&](int b) {
       const size_t end = std::min(count, (static_cast<size_t>(b) + 1) * kBlock);
       for (size_t t = static_cast<size_t>(b) * kBlock; t < end; ++t) {
+        const unsigned* corner = &triangles[3 * t];
+        if (moved && !(moved[corner[0]] | moved[corner[1]] | moved[corner[2]])) continue;
+        double* p = &n[4 * t];
+        p[0] = p[1] = p[2] = p[3] = 0.0;
         const float* a = &vertices[3 * size_t(triangles[3 * t])];
         const float* bv = &vertices[3 * size_t(triangles[3 * t + 1])];
         const float* c = &vertices[3 * size_t(triangles[3 * t + 2])];
@@ -108,7 +115,6 @@ struct Planes {
         const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
         if (!(len > 0.0)) continue;
         nx /= len, ny /= len, nz /= len;
-        double* p = &n[4 * t];
         p[0] = nx, p[1] = ny, p[2] = nz, p[3] = -(nx * a[0] + ny * a[1] + nz * a[2]);
       }
     });
@@ -353,15 +359,22 @@ class ExactScene::Impl {
 
   // Where the vertices are the scene's already, there is nothing to do.
   BvhWork refit(const std::vector<float>& vertices) {
-    if (!geometry_ || std::memcmp(vertex_data(), vertices.data(), vertices.size() * sizeof(float)) == 0)
-      return BvhWork::Reused;
+    if (!geometry_) return BvhWork::Reused;
+    float* held = vertex_data();
+    std::vector<uint8_t> moved(vertices_);
+    bool any = false;
+    for (size_t v = 0; v < vertices_; ++v) {
+      moved[v] = std::memcmp(held + 3 * v, vertices.data() + 3 * v, 3 * sizeof(float)) != 0;
+      any |= moved[v] != 0;
+    }
+    if (!any) return BvhWork::Reused;
     try {
-      std::memcpy(vertex_data(), vertices.data(), vertices.size() * sizeof(float));
+      std::memcpy(held, vertices.data(), vertices.size() * sizeof(float));
       rtcUpdateGeometryBuffer(geometry_.get(), RTC_BUFFER_TYPE_VERTEX, 0);
       rtcCommitGeometry(geometry_.get());
       rtcCommitScene(scene_.get());
       errors_.rethrow();
-      planes_.compute(vertex_data(), index_data(), triangles_, threads_);
+      planes_.compute(held, index_data(), triangles_, threads_, moved.data());
     } catch (const std::exception& e) {
       broken_ = e.what();
       throw;
