@@ -139,7 +139,8 @@ void bind_exact(pyb::module_& m) {
       .def_property_readonly(
           "last_update", [](const ExactScene& s) { return report_dict(s.last_update()); },
           "{'bvh': 'built' | 'refit' | 'reused', 'ms': float}: what the constructor or the last\n"
-          "update() did to the BVH, and its time (the wait for running traces left out).")
+          "finished update() did to the BVH, and its time (the wait for running traces left out);\n"
+          "reading it never waits for an update in progress.")
       .def_property_readonly("vertex_count", &ExactScene::vertex_count, "Vertices in the scene.")
       .def_property_readonly("triangle_count", &ExactScene::triangle_count, "Triangles in the scene.")
       .def("__repr__", &scene_repr);

@@ -53,9 +53,9 @@ class ExactScene {
   // A whole new mesh: a refit when its triangles are the scene's, a rebuild
   // when they are not (or the vertex count changed).
   BvhReport update(const TriangleMesh& mesh);
-  // What the constructor or the last update did.
+  // What the constructor or the last finished update did, and the counts it
+  // left; these three never wait for an update in progress.
   BvhReport last_update() const;
-
   size_t vertex_count() const;
   size_t triangle_count() const;
 

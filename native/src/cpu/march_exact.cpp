@@ -394,7 +394,22 @@ class ExactScene::Impl {
 
   mutable std::shared_mutex use;  // traces share it; build and refit take it alone
   size_t vertices_ = 0, triangles_ = 0;
-  BvhReport last_;
+
+  // What the getters read, under a lock of its own: a caller asking what the
+  // last update did (Blender's UI, say) must not wait out a rebuild in progress.
+  struct Summary {
+    BvhReport last;
+    size_t vertices = 0, triangles = 0;
+  };
+  BvhReport report(BvhWork work, std::chrono::steady_clock::time_point start) {
+    std::lock_guard<std::mutex> lock(summary_mu);
+    summary = {{work, elapsed_ms(start)}, vertices_, triangles_};
+    return summary.last;
+  }
+  Summary read_summary() const {
+    std::lock_guard<std::mutex> lock(summary_mu);
+    return summary;
+  }
   std::string broken_;  // why the last refit failed; empty when the scene is whole
 
  private:
@@ -418,6 +433,8 @@ class ExactScene::Impl {
   // The mirror rays of row y, then the rays back to the camera from their hits.
   void trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y, Image& out) const;
 
+  mutable std::mutex summary_mu;
+  Summary summary;
   int threads_;
   bool wide_ = false;         // packets of 16
   mutable ErrorSink errors_;  // before the device, which reports to it until released
@@ -601,7 +618,7 @@ ExactScene::ExactScene(const TriangleMesh& mesh, int threads) {
   require_arrays(mesh);
   impl_ = std::make_unique<Impl>(threads);
   impl_->build(mesh);
-  impl_->last_ = {BvhWork::Built, elapsed_ms(start)};
+  impl_->report(BvhWork::Built, start);
 }
 
 ExactScene::~ExactScene() = default;
@@ -619,9 +636,7 @@ BvhReport ExactScene::update_vertices(const std::vector<float>& vertices) {
   if (!impl_->broken_.empty())
     throw Error("glint: march \"exact\": the scene's last update failed (" + impl_->broken_ +
                 "); update it with its vertices and triangles to rebuild it");
-  const BvhWork work = impl_->refit(vertices);
-  impl_->last_ = {work, elapsed_ms(start)};
-  return impl_->last_;
+  return impl_->report(impl_->refit(vertices), start);
 }
 
 BvhReport ExactScene::update(const TriangleMesh& mesh) {
@@ -634,24 +649,14 @@ BvhReport ExactScene::update(const TriangleMesh& mesh) {
     work = impl_->refit(mesh.vertices);
   else
     impl_->build(mesh);
-  impl_->last_ = {work, elapsed_ms(start)};
-  return impl_->last_;
+  return impl_->report(work, start);
 }
 
-BvhReport ExactScene::last_update() const {
-  std::shared_lock<std::shared_mutex> lock(impl_->use);
-  return impl_->last_;
-}
+BvhReport ExactScene::last_update() const { return impl_->read_summary().last; }
 
-size_t ExactScene::vertex_count() const {
-  std::shared_lock<std::shared_mutex> lock(impl_->use);
-  return impl_->vertices_;
-}
+size_t ExactScene::vertex_count() const { return impl_->read_summary().vertices; }
 
-size_t ExactScene::triangle_count() const {
-  std::shared_lock<std::shared_mutex> lock(impl_->use);
-  return impl_->triangles_;
-}
+size_t ExactScene::triangle_count() const { return impl_->read_summary().triangles; }
 
 namespace cpu {
 
