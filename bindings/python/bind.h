@@ -24,6 +24,7 @@ void bind_raster(pyb::module_& m);
 void bind_exr(pyb::module_& m);
 void bind_metrics(pyb::module_& m);
 void bind_memory(pyb::module_& m);
+void bind_exact(pyb::module_& m);   // ExactScene: the exact march's triangles and BVH kept between frames
 
 // TraceOptions from the keywords trace(), composite_layers() and pipeline()
 // share, checked (ValueError naming the keyword).

@@ -108,41 +108,55 @@ pyb::array_t<float> array_from_image(Image&& img) {
                              data, owner);
 }
 
-Mat4 projection_from_array(const pyb::handle& obj) {
-  pyb::array a = as_array(obj, "projection");
+Mat4 matrix_from_array(const pyb::handle& obj, const char* name) {
+  pyb::array a = as_array(obj, name);
   const bool f32 = a.dtype().is(pyb::dtype::of<float>());
   const bool f64 = a.dtype().is(pyb::dtype::of<double>());
-  if (!f32 && !f64) throw InvalidArgument("projection", "expected dtype float32 or float64, got " + dtype_of(a));
+  if (!f32 && !f64) throw InvalidArgument(name, "expected dtype float32 or float64, got " + dtype_of(a));
   if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
-    throw InvalidArgument("projection", "expected shape (4, 4), got " + shape_of(a));
+    throw InvalidArgument(name, "expected shape (4, 4), got " + shape_of(a));
   auto d = pyb::array_t<double, pyb::array::c_style | pyb::array::forcecast>::ensure(a);
   Mat4 m;
   for (int i = 0; i < 16; ++i) m.m[i] = d.data()[i];
+  return m;
+}
+
+Mat4 projection_from_array(const pyb::handle& obj) {
+  Mat4 m = matrix_from_array(obj, "projection");
   validate_projection(m);
+  return m;
+}
+
+std::vector<float> vertices_from_array(const pyb::handle& obj, const char* name) {
+  pyb::array v = as_array(obj, name);
+  if (!v.dtype().is(pyb::dtype::of<float>()) || v.ndim() != 2 || v.shape(1) != 3)
+    throw InvalidArgument(name, "expected vertices float32 of shape (N, 3), got " + dtype_of(v) + " " + shape_of(v));
+  auto vc = pyb::array_t<float, pyb::array::c_style | pyb::array::forcecast>::ensure(v);
+  return std::vector<float>(vc.data(), vc.data() + vc.size());
+}
+
+TriangleMesh mesh_from_arrays(const pyb::handle& vertices, const pyb::handle& triangles, const char* vertices_name,
+                              const char* triangles_name) {
+  TriangleMesh m;
+  m.vertices = vertices_from_array(vertices, vertices_name);
+  pyb::array f = as_array(triangles, triangles_name);
+  if (!f.dtype().is(pyb::dtype::of<int32_t>()) || f.ndim() != 2 || f.shape(1) != 3)
+    throw InvalidArgument(triangles_name, "expected triangles int32 of shape (M, 3), got " + dtype_of(f) + " " +
+                                              shape_of(f));
+  auto fc = pyb::array_t<int32_t, pyb::array::c_style | pyb::array::forcecast>::ensure(f);
+  m.triangles.assign(fc.data(), fc.data() + fc.size());
+  validate(m);
   return m;
 }
 
 std::optional<TriangleMesh> mesh_from_arg(const pyb::handle& obj) {
   if (obj.is_none()) return std::nullopt;
+  if (std::optional<TriangleMesh> kept = mesh_from_exact_scene(obj)) return kept;
   if (!pyb::isinstance<pyb::tuple>(obj) || pyb::len(obj) != 2)
-    throw InvalidArgument("mesh", "expected a tuple (vertices, triangles), got " +
+    throw InvalidArgument("mesh", "expected a tuple (vertices, triangles) or an ExactScene, got " +
                                       pyb::str(pyb::type::of(obj).attr("__name__")).cast<std::string>());
   pyb::tuple t = pyb::reinterpret_borrow<pyb::tuple>(obj);
-  pyb::array v = as_array(t[0], "mesh");
-  pyb::array f = as_array(t[1], "mesh");
-  if (!v.dtype().is(pyb::dtype::of<float>()) || v.ndim() != 2 || v.shape(1) != 3)
-    throw InvalidArgument("mesh", "expected vertices float32 of shape (N, 3), got " + dtype_of(v) +
-                                      " " + shape_of(v));
-  if (!f.dtype().is(pyb::dtype::of<int32_t>()) || f.ndim() != 2 || f.shape(1) != 3)
-    throw InvalidArgument("mesh", "expected triangles int32 of shape (M, 3), got " + dtype_of(f) +
-                                      " " + shape_of(f));
-  auto vc = pyb::array_t<float, pyb::array::c_style | pyb::array::forcecast>::ensure(v);
-  auto fc = pyb::array_t<int32_t, pyb::array::c_style | pyb::array::forcecast>::ensure(f);
-  TriangleMesh m;
-  m.vertices.assign(vc.data(), vc.data() + vc.size());
-  m.triangles.assign(fc.data(), fc.data() + fc.size());
-  validate(m);
-  return m;
+  return mesh_from_arrays(t[0], t[1], "mesh", "mesh");
 }
 
 pyb::str lenient_str(const std::string& text) {

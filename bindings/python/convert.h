@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "glint/image.h"
 #include "glint/mesh.h"
@@ -37,10 +38,24 @@ pyb::array_t<float> array_from_image(Image&& img);
 // messages naming them) as a Python str: bytes that are not UTF-8 become
 // backslash escapes instead of a UnicodeDecodeError in place of the answer.
 pyb::str lenient_str(const std::string& text);
-// None, or (vertices float32 [N, 3], triangles int32 [M, 3]) as a validated
-// mesh; anything else raises ValueError naming `mesh`.
+// None, (vertices float32 [N, 3], triangles int32 [M, 3]) as a validated
+// mesh, or an ExactScene (seen from a camera) as one; anything else raises
+// ValueError naming `mesh`.
 std::optional<TriangleMesh> mesh_from_arg(const pyb::handle& obj);
-// A 4x4 float32/float64 array (rows as printed) as a validated Mat4.
+// The two arrays of a mesh, validated; ValueError naming the argument.
+std::vector<float> vertices_from_array(const pyb::handle& obj, const char* name);
+TriangleMesh mesh_from_arrays(const pyb::handle& vertices, const pyb::handle& triangles, const char* vertices_name,
+                              const char* triangles_name);
+// glint_core.ExactScene or ExactView (bind_exact.cpp) as the mesh a trace
+// reads; nullopt for anything else.
+std::optional<TriangleMesh> mesh_from_exact_scene(const pyb::handle& obj);
+// Registers ExactScene and ExactView: declared here, beside what mesh_from_arg
+// takes from it, so that module.cpp adds only the call.
+void bind_exact(pyb::module_& m);
+// A 4x4 float32/float64 array (rows as printed) as a Mat4; ValueError naming
+// `name` for any other array.
+Mat4 matrix_from_array(const pyb::handle& obj, const char* name);
+// The same, validated as a projection.
 Mat4 projection_from_array(const pyb::handle& obj);
 
 }  // namespace glint::py

@@ -21,6 +21,8 @@ import sys
 _TYPES = (
     (re.compile(r"numpy\.ndarray\[numpy\.(\w+)\]"), r"numpy.typing.NDArray[numpy.\1]"),
     (re.compile(r"\bhandle\b"), "Any"),
+    # The module's own classes, as the stub declares them.
+    (re.compile(r"\bglint_core\."), ""),
 )
 
 
@@ -37,17 +39,43 @@ def _doc_body(doc: str) -> list:
     return [line.replace('"""', "'''") for line in lines]
 
 
-def _function(name: str, fn) -> str:
+def _function(name: str, fn, indent: str = "") -> str:
     doc = fn.__doc__ or ""
     first = doc.splitlines()[0] if doc else ""
     if not first.startswith(name + "("):
         raise SystemExit(f"make_stub: {name}'s docstring does not start with its signature: {first!r}")
     signature = _annotation(first[len(name):])
-    body = _doc_body(doc)
-    text = f"def {name}{signature}:\n"
+    return f"{indent}def {name}{signature}:\n" + _body(_doc_body(doc), indent + "    ")
+
+
+def _body(body: list, indent: str) -> str:
+    text = ""
     if body:
-        text += '    """' + "\n".join(("    " + line).rstrip() for line in body).lstrip() + '\n    """\n'
-    return text + "    ...\n"
+        text += indent + '"""' + "\n".join((indent + line).rstrip() for line in body).lstrip() + \
+            "\n" + indent + '"""\n'
+    return text + indent + "...\n"
+
+
+def _class(name: str, cls) -> str:
+    """A class the module defines: its constructor, methods and read-only properties,
+    each from its own docstring (pybind11 starts a property getter's with
+    ``(self: ...) -> type``)."""
+    doc = (cls.__doc__ or "").strip().replace('"""', "'''")
+    text = f"class {name}:\n"
+    if doc:
+        text += '    """' + "\n".join(("    " + line).rstrip() for line in doc.splitlines()).lstrip() + '\n    """\n'
+    for attr, member in vars(cls).items():
+        if isinstance(member, property):
+            first = (member.fget.__doc__ or "").splitlines()[0] if member.fget.__doc__ else ""
+            returns = first.rpartition("->")[2].strip() if "->" in first else "Any"
+            text += f"    @property\n    def {attr}(self) -> {_annotation(returns)}:\n"
+            lines = (member.__doc__ or "").strip("\n").splitlines()
+            text += _body([line.replace('"""', "'''") for line in lines], "        ")
+        elif attr == "__init__" and not (member.__doc__ or "").startswith("__init__("):
+            continue  # no constructor of its own: made by the module only
+        elif attr == "__init__" or (callable(member) and not attr.startswith("_")):
+            text += _function(attr, member, "    ")
+    return text
 
 
 def _constant(name: str, value) -> str:
@@ -72,6 +100,8 @@ def stub(module) -> str:
         obj = getattr(module, name)
         if inspect.isclass(obj) and issubclass(obj, BaseException):
             parts.append(_exception(name, obj))
+        elif inspect.isclass(obj):
+            parts.append(_class(name, obj))
         elif callable(obj):
             parts.append(_function(name, obj))
         else:

@@ -65,4 +65,5 @@ PYBIND11_MODULE(glint_core, m) {
   bind_raster(m);
   bind_metrics(m);
   bind_memory(m);
+  bind_exact(m);
 }

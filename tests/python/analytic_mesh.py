@@ -1,5 +1,5 @@
-"""Triangles of an analytic scene (tests/python/analytic.py), in view space, for the
-exact march's ``mesh=(vertices, triangles)``.
+"""Triangles of an analytic scene (tests/python/analytic.py), in view space for the
+exact march's ``mesh=(vertices, triangles)``, or in world space for an ExactScene.
 
 Planes and boxes are exact as triangles; a plane becomes a square of side
 ``2 * plane_extent`` around its point, and a sphere a UV sphere whose facets lie
@@ -55,8 +55,8 @@ def _sphere(obj: analytic.Sphere, segments: int):
     return np.array(verts), np.array(f)
 
 
-def scene_mesh(scene: analytic.Scene, *, plane_extent: float = 500.0, segments: int = 96):
-    """(vertices float32 [N, 3] in view space, triangles int32 [M, 3])."""
+def scene_mesh(scene: analytic.Scene, *, plane_extent: float = 500.0, segments: int = 96, world: bool = False):
+    """(vertices float32 [N, 3] in view space, or world space with ``world``, triangles int32 [M, 3])."""
     verts, tris, base = [], [], 0
     for obj in scene.objects:
         if isinstance(obj, analytic.Plane):
@@ -70,5 +70,12 @@ def scene_mesh(scene: analytic.Scene, *, plane_extent: float = 500.0, segments: 
         verts.append(v)
         tris.append(f + base)
         base += len(v)
-    (view,) = analytic._to_view(scene.camera.view_matrix(), pts=np.concatenate(verts))
-    return view.astype(np.float32), np.concatenate(tris).astype(np.int32)
+    pts = np.concatenate(verts)
+    if not world:
+        (pts,) = analytic._to_view(scene.camera.view_matrix(), pts=pts)
+    return pts.astype(np.float32), np.concatenate(tris).astype(np.int32)
+
+
+def view_to_world(camera: analytic.Camera) -> np.ndarray:
+    """The camera's matrix from view space into world space (Blender's camera.matrix_world)."""
+    return np.linalg.inv(camera.view_matrix())

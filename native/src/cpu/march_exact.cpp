@@ -1,6 +1,7 @@
 // march="exact": every pixel's mirror ray traced against the scene's own
 // triangles with Embree (3 or 4, whichever the distribution has), the answer
-// every screen-space march approximates.
+// every screen-space march approximates, and the ExactScene that keeps its
+// BVH between calls (glint/exact_scene.h). Embree appears in no other file.
 // The rules are SPEC's: the first hit within max_distance, reported as
 // (u, v, 1, 1) only where the camera sees that point; no fades.
 #if GLINT_EMBREE_MAJOR >= 4
@@ -9,20 +10,30 @@
 #include <embree3/rtcore.h>
 #endif
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <mutex>
+#include <shared_mutex>
 #include <string>
+#include <vector>
 
 #include "glint/errors.h"
+#include "glint/exact_scene.h"
 #include "glint/mesh.h"
 #include "parallel.h"
 #include "ray.h"
 #include "trace.h"
 
-namespace glint::cpu {
+namespace glint {
 namespace {
+
+using cpu::MarchSetup;
+using cpu::V3;
 
 struct D3 {
   double x, y, z;
@@ -32,11 +43,30 @@ D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 D3 operator*(D3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
 double norm(D3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 
-// Embree reports errors through a callback; the first one of a call becomes
-// the exception the caller sees.
+// Embree reports errors through a callback, from whichever thread met them;
+// the first one becomes the exception the caller sees.
+class ErrorSink {
+ public:
+  void record(RTCError code, const char* what) {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (first_.empty()) first_ = "Embree error " + std::to_string(code) + ": " + (what ? what : "");
+  }
+  // Throws the first error recorded since the last call, if any.
+  void rethrow() {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (first_.empty()) return;
+    std::string e;
+    e.swap(first_);
+    throw Error("glint: march \"exact\": " + e);
+  }
+
+ private:
+  std::mutex mu_;
+  std::string first_;
+};
+
 void on_device_error(void* user, RTCError code, const char* what) {
-  auto* first = static_cast<std::string*>(user);
-  if (first->empty()) first->assign("Embree error " + std::to_string(code) + ": " + (what ? what : ""));
+  static_cast<ErrorSink*>(user)->record(code, what);
 }
 
 struct DeviceDeleter {
@@ -45,8 +75,12 @@ struct DeviceDeleter {
 struct SceneDeleter {
   void operator()(RTCScene s) const { rtcReleaseScene(s); }
 };
+struct GeometryDeleter {
+  void operator()(RTCGeometry g) const { rtcReleaseGeometry(g); }
+};
 using DevicePtr = std::unique_ptr<std::remove_pointer_t<RTCDevice>, DeviceDeleter>;
 using ScenePtr = std::unique_ptr<std::remove_pointer_t<RTCScene>, SceneDeleter>;
+using GeometryPtr = std::unique_ptr<std::remove_pointer_t<RTCGeometry>, GeometryDeleter>;
 
 // The triangles' planes, for telling a ray's own surface from a real hit:
 // float positions of a G-buffer lie on their triangle only to a few ulps, so
@@ -55,21 +89,35 @@ using ScenePtr = std::unique_ptr<std::remove_pointer_t<RTCScene>, SceneDeleter>;
 // the ray's origin is that surface, whatever t it has.
 struct Planes {
   std::vector<double> n;  // unit normal (3) and offset (1) per triangle; 0 for degenerate ones
-  explicit Planes(const TriangleMesh& m) : n(m.triangles.size() / 3 * 4, 0.0) {
-    for (size_t t = 0; t < m.triangles.size() / 3; ++t) {
-      const float* a = &m.vertices[3 * m.triangles[3 * t]];
-      const float* b = &m.vertices[3 * m.triangles[3 * t + 1]];
-      const float* c = &m.vertices[3 * m.triangles[3 * t + 2]];
-      const double e1[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-      const double e2[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-      double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
-             nz = e1[0] * e2[1] - e1[1] * e2[0];
-      const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-      if (!(len > 0.0)) continue;
-      nx /= len, ny /= len, nz /= len;
-      double* p = &n[4 * t];
-      p[0] = nx, p[1] = ny, p[2] = nz, p[3] = -(nx * a[0] + ny * a[1] + nz * a[2]);
-    }
+
+  // Every plane, or where `moved` (a flag per vertex) is given, those of the
+  // triangles with a moved corner: a refit of one object's frame leaves the
+  // rest of a million planes as they were.
+  void compute(const float* vertices, const unsigned* triangles, size_t count, int threads,
+               const uint8_t* moved = nullptr) {
+    if (!moved) n.assign(count * 4, 0.0);
+    constexpr size_t kBlock = 1 << 15;
+    const int blocks = static_cast<int>((count + kBlock - 1) / kBlock);
+    parallel_rows(0, blocks, threads, [&](int b) {
+      const size_t end = std::min(count, (static_cast<size_t>(b) + 1) * kBlock);
+      for (size_t t = static_cast<size_t>(b) * kBlock; t < end; ++t) {
+        const unsigned* corner = &triangles[3 * t];
+        if (moved && !(moved[corner[0]] | moved[corner[1]] | moved[corner[2]])) continue;
+        double* p = &n[4 * t];
+        p[0] = p[1] = p[2] = p[3] = 0.0;
+        const float* a = &vertices[3 * size_t(triangles[3 * t])];
+        const float* bv = &vertices[3 * size_t(triangles[3 * t + 1])];
+        const float* c = &vertices[3 * size_t(triangles[3 * t + 2])];
+        const double e1[3] = {double(bv[0]) - a[0], double(bv[1]) - a[1], double(bv[2]) - a[2]};
+        const double e2[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+        double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
+               nz = e1[0] * e2[1] - e1[1] * e2[0];
+        const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+        if (!(len > 0.0)) continue;
+        nx /= len, ny /= len, nz /= len;
+        p[0] = nx, p[1] = ny, p[2] = nz, p[3] = -(nx * a[0] + ny * a[1] + nz * a[2]);
+      }
+    });
   }
   double distance(unsigned prim, D3 p) const {
     const double* q = &n[4 * prim];
@@ -79,148 +127,550 @@ struct Planes {
 
 // How far from a point its own surface may appear, relative to the point's
 // magnitude: G-buffer positions are interpolated in float32 (ulp 6e-8), and
-// a generous multiple keeps grazing rays off their own triangle.
+// a generous multiple keeps grazing rays off their own triangle. In a frame
+// other than view space the vertices were rounded there, so the larger of
+// the two magnitudes sets the scale.
 constexpr double kSurfaceTolerance = 1e-5;
 
-// The first hit along origin + t * dir for t in (0, tfar] that is not on a
-// surface through `origin` itself; false where there is none.
-bool first_hit(RTCScene scene, const Planes& planes, D3 origin, D3 dir, double tfar, double& t_hit,
-               unsigned& prim) {
-  const double scale = norm(origin) + 1e-30;
-  double tnear = 0.0;
-  // A handful of coplanar neighbours at most; past that the ray is skimming
-  // its own surface and reflects nothing.
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    RTCRayHit rh;
-    rh.ray.org_x = float(origin.x), rh.ray.org_y = float(origin.y), rh.ray.org_z = float(origin.z);
-    rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
-    rh.ray.tnear = float(tnear);
-    rh.ray.tfar = float(tfar);
-    rh.ray.time = 0.0f;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+// View space -> the scene's frame. The identity is kept apart so that a mesh
+// in view space is traced with the very floats it was before frames existed.
+struct Frame {
+  bool identity = true;
+  double m[12] = {};
+
+  explicit Frame(const Mat4& v) {
+    static const Mat4 one{{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}};
+    identity = v.m == one.m;
+    for (int i = 0; i < 12; ++i) m[i] = v.m[i];
+  }
+  D3 point(D3 p) const {
+    if (identity) return p;
+    return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+            m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+  }
+  // Not renormalised: an affine map keeps a ray's parameter, so t (and
+  // max_distance, in view units) means the same point in both frames.
+  D3 direction(D3 d) const {
+    if (identity) return d;
+    return {m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+            m[8] * d.x + m[9] * d.y + m[10] * d.z};
+  }
+};
+
+// One ray of a batch, in view space, and what it met.
+struct Query {
+  D3 origin, dir;
+  double tfar;
+  bool found = false;
+  double t = 0.0;  // where it met a surface, when found
+};
+
+// A query on its way through Embree, in the scene's frame.
+struct Live {
+  D3 origin;
+  float dir[3];
+  double scale;  // of the surface tolerance
+  double tnear;
+  uint32_t query;
+};
+
+// What a ray does about hits on its own surface.
+enum class Own {
+  // The mirror rays, one per pixel: a filter drops such hits inside the one
+  // traversal, which goes on to the next surface, and packets go through the
+  // BVH as one frustum (Embree's coherent mode). Half of the floor's rays meet
+  // their own triangle first, and asking again cost a second traversal each.
+  Skip,
+  // The rays back to the camera, one per hit on screen: such a hit ends the
+  // traversal and the ray is asked again from just past it, eight times at
+  // most, each lane traversed as a ray of its own. The coherent traversal
+  // settles exact distance ties its own way (27 pixels of the orthographic
+  // sample, whose camera rays run exactly along an axis, came out otherwise),
+  // and these rays are too few for it to matter to the time.
+  Retry,
+};
+
 #if GLINT_EMBREE_MAJOR >= 4
-    rtcIntersect1(scene, &rh);  // Embree 4 folded the context into optional arguments
+using QueryContext = RTCRayQueryContext;
 #else
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    rtcIntersect1(scene, &ctx, &rh);
+using QueryContext = RTCIntersectContext;
 #endif
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    if (planes.distance(rh.hit.primID, origin) > kSurfaceTolerance * scale) {
-      t_hit = rh.ray.tfar;
-      prim = rh.hit.primID;
-      return true;
-    }
-    // Step just past this hit: the next float of t, scaled so that it moves.
-    tnear = std::nextafter(float(rh.ray.tfar), std::numeric_limits<float>::infinity());
-    if (!(tnear < tfar)) return false;
+
+// Embree hands the context pointer of a query to its filter: the lanes'
+// origins ride behind it.
+struct SkipContext {
+  QueryContext base;
+  const Planes* planes;
+  const Live* lanes;  // indexed by the ray's id: its lane
+};
+
+void skip_own_surface(const RTCFilterFunctionNArguments* args) {
+  const auto* c = reinterpret_cast<const SkipContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    const Live& r = c->lanes[RTCRayN_id(args->ray, args->N, i)];
+    if (!(c->planes->distance(RTCHitN_primID(args->hit, args->N, i), r.origin) > kSurfaceTolerance * r.scale))
+      args->valid[i] = 0;
   }
-  return false;
 }
 
-// The plane clip z = -w, as an affine function of a view-space point.
-double near_side(const double* P, D3 p) {
-  return clip_row(P, 2, p.x, p.y, p.z) + clip_row(P, 3, p.x, p.y, p.z);
-}
-
-// Does the camera see `hit`? The segment from it towards the camera, as far
-// as the near plane, must be free of other surfaces.
-bool camera_sees(RTCScene scene, const Planes& planes, const MarchSetup& s, D3 hit) {
-  D3 back;
-  if (s.eye_kind == EyeKind::Direction) {
-    back = {-double(s.eye[0]), -double(s.eye[1]), -double(s.eye[2])};
-  } else {
-    const D3 eye = s.eye_kind == EyeKind::Origin ? D3{0, 0, 0} : D3{s.eye[0], s.eye[1], s.eye[2]};
-    back = eye + hit * -1.0;
+// Embree's packets of 8 (AVX) and 16 (AVX-512): the scene takes the widest
+// the processor runs natively.
+template <int K>
+struct Packet;
+template <>
+struct Packet<8> {
+  using RayHit = RTCRayHit8;
+#if GLINT_EMBREE_MAJOR >= 4
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectArguments* a) {
+    rtcIntersect8(valid, s, rh, a);
   }
-  const double len = norm(back);
-  if (!(len > 0.0)) return false;
-  back = back * (1.0 / len);
-  // near_side is affine along the segment: it reaches 0 at the near plane.
-  const double n0 = near_side(s.projd, hit), n1 = near_side(s.projd, hit + back);
-  const double unbounded = s.eye_kind == EyeKind::Direction ? std::numeric_limits<float>::max() : len;
-  double tfar = n0 > 0.0 && n0 - n1 > 0.0 ? n0 / (n0 - n1) : unbounded;
-  if (s.eye_kind != EyeKind::Direction && tfar > len) tfar = len;
-  if (!(tfar > 0.0)) return true;
-  double t;
-  unsigned prim;
-  return !first_hit(scene, planes, hit, back, tfar, t, prim);
-}
-
-ScenePtr build_scene(RTCDevice device, const TriangleMesh& mesh) {
-  ScenePtr scene(rtcNewScene(device));
-  rtcSetSceneFlags(scene.get(), RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_MEDIUM);
-  const size_t nv = mesh.vertices.size() / 3, nt = mesh.triangles.size() / 3;
-  if (nt > 0) {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    // Embree-owned buffers: it reads vertices 16 bytes at a time, which a
-    // tightly packed caller array does not allow at its end.
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), nv));
-    auto* f = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                             3 * sizeof(unsigned), nt));
-    if (v && f) {
-      std::memcpy(v, mesh.vertices.data(), nv * 3 * sizeof(float));
-      std::memcpy(f, mesh.triangles.data(), nt * 3 * sizeof(unsigned));
-      rtcCommitGeometry(g);
-      rtcAttachGeometry(scene.get(), g);
-    }
-    rtcReleaseGeometry(g);
+#else
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
+    rtcIntersect8(valid, s, c, rh);
   }
-  rtcCommitScene(scene.get());
-  return scene;
+#endif
+};
+template <>
+struct Packet<16> {
+  using RayHit = RTCRayHit16;
+#if GLINT_EMBREE_MAJOR >= 4
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectArguments* a) {
+    rtcIntersect16(valid, s, rh, a);
+  }
+#else
+  static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
+    rtcIntersect16(valid, s, c, rh);
+  }
+#endif
+};
+
+template <int K>
+void intersect(const int* valid, RTCScene scene, typename Packet<K>::RayHit* rh, SkipContext* ctx, Own own) {
+#if GLINT_EMBREE_MAJOR >= 4
+  rtcInitRayQueryContext(&ctx->base);
+  RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  args.context = &ctx->base;
+  if (own == Own::Skip) {
+    args.flags = static_cast<RTCRayQueryFlags>(RTC_RAY_QUERY_FLAG_COHERENT | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
+    args.filter = &skip_own_surface;
+  }
+  Packet<K>::intersect(valid, scene, rh, &args);
+#else
+  rtcInitIntersectContext(&ctx->base);
+  if (own == Own::Skip) {
+    ctx->base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    ctx->base.filter = &skip_own_surface;
+  }
+  Packet<K>::intersect(valid, scene, rh, &ctx->base);
+#endif
 }
 
-void march_exact(RTCScene scene, const Planes& planes, const MarchSetup& s, int x, int y, float out[4]) {
-  out[0] = out[1] = out[2] = out[3] = 0.0f;
-  V3 from, unit_from, normal;
-  if (!read_origin(s, x, y, from, unit_from, normal)) return;
-  const V3 pivot = normalize(reflect(unit_from, normal));
-  if (!finite(pivot)) return;
-  double t;
-  unsigned prim;
-  if (!first_hit(scene, planes, d3(from), d3(pivot), s.opt.max_distance, t, prim)) return;
-  const D3 hit = d3(from) + d3(pivot) * t;
-  const double* P = s.projd;
-  const double w = clip_row(P, 3, hit.x, hit.y, hit.z);
-  if (!(w > 0.0)) return;
-  const double z = clip_row(P, 2, hit.x, hit.y, hit.z) / w;
-  const double u = clip_row(P, 0, hit.x, hit.y, hit.z) / w * 0.5 + 0.5;
-  const double v = clip_row(P, 1, hit.x, hit.y, hit.z) / w * 0.5 + 0.5;
-  if (!(z >= -1.0 && z <= 1.0 && u >= 0.0 && u < 1.0 && v >= 0.0 && v < 1.0)) return;
-  if (!camera_sees(scene, planes, s, hit)) return;
-  out[0] = float(u), out[1] = float(v), out[2] = out[3] = 1.0f;
+double elapsed_ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
 }
 
 }  // namespace
 
-Image trace_exact(const TraceInputs& in, const TraceOptions& opt, int threads) {
-  validate(*in.mesh);
-  std::string error;
-  // Embree's own worker threads build the BVH; the rays run on ours.
-  const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
-  DevicePtr device(rtcNewDevice(config.empty() ? nullptr : config.c_str()));
-  if (!device) throw Error("glint: march \"exact\": Embree could not start (" + std::to_string(rtcGetDeviceError(nullptr)) + ")");
-  rtcSetDeviceErrorFunction(device.get(), &on_device_error, &error);
-  const ScenePtr scene = build_scene(device.get(), *in.mesh);
-  if (!error.empty()) throw Error("glint: march \"exact\": " + error);
-  const Planes planes(*in.mesh);
-  const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
-  Image out(in.position.width, in.position.height);
-  const Image* spec = in.specular;
-  parallel_rows(0, out.height, threads, [&](int y) {
-    for (int x = 0; x < out.width; ++x) {
-      if (spec && !is_reflective(spec->px(x, y))) continue;
-      march_exact(scene.get(), planes, setup, x, y, out.px(x, y));
+const char* to_string(BvhWork work) {
+  switch (work) {
+    case BvhWork::Built:
+      return "built";
+    case BvhWork::Refit:
+      return "refit";
+    case BvhWork::Reused:
+      return "reused";
+  }
+  return "?";
+}
+
+void validate_view_to_world(const Mat4& v) {
+  for (double e : v.m)
+    if (!std::isfinite(e)) throw InvalidArgument("view_to_world", "expected a finite 4x4 matrix");
+  if (v(3, 0) != 0.0 || v(3, 1) != 0.0 || v(3, 2) != 0.0 || v(3, 3) != 1.0)
+    throw InvalidArgument("view_to_world", "expected an affine matrix (last row 0, 0, 0, 1), got (" +
+                                               std::to_string(v(3, 0)) + ", " + std::to_string(v(3, 1)) + ", " +
+                                               std::to_string(v(3, 2)) + ", " + std::to_string(v(3, 3)) + ")");
+  const double det = v(0, 0) * (v(1, 1) * v(2, 2) - v(1, 2) * v(2, 1)) -
+                     v(0, 1) * (v(1, 0) * v(2, 2) - v(1, 2) * v(2, 0)) +
+                     v(0, 2) * (v(1, 0) * v(2, 1) - v(1, 1) * v(2, 0));
+  if (!(std::fabs(det) > 0.0) || !std::isfinite(det))
+    throw InvalidArgument("view_to_world", "expected an invertible matrix, its 3x3 part is singular");
+}
+
+class ExactScene::Impl {
+ public:
+  explicit Impl(int threads) : threads_(threads) {
+    // Embree's own worker threads build and refit the BVH; the rays run on ours.
+    const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
+    device_.reset(rtcNewDevice(config.empty() ? nullptr : config.c_str()));
+    if (!device_)
+      throw Error("glint: march \"exact\": Embree could not start (" + std::to_string(rtcGetDeviceError(nullptr)) +
+                  ")");
+    rtcSetDeviceErrorFunction(device_.get(), &on_device_error, &errors_);
+    wide_ = rtcGetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+  }
+
+  // Callers hold `use` exclusively for these two. A build that fails leaves
+  // the scene as it was; a refit that fails has already changed the vertices,
+  // so the scene refuses to trace until a whole mesh rebuilds it.
+  void build(const TriangleMesh& mesh) {
+    ScenePtr scene(rtcNewScene(device_.get()));
+    GeometryPtr geometry;
+    // DYNAMIC: without it Embree 3 throws a committed BVH away and builds anew
+    // even where every geometry asks for a refit. The filter flag lets the
+    // mirror rays' queries bring their own (Own::Skip).
+#if GLINT_EMBREE_MAJOR >= 4
+    constexpr auto kFilter = RTC_SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS;
+#else
+    constexpr auto kFilter = RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
+#endif
+    rtcSetSceneFlags(scene.get(), static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC | kFilter));
+    // The two-level BVH: the only one whose geometries honour their own build
+    // quality, REFIT among them. With one geometry its top level is the
+    // geometry's BVH itself, so rays pay nothing for it.
+    rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_LOW);
+    const size_t nv = mesh.vertices.size() / 3, nt = mesh.triangles.size() / 3;
+    Planes planes;
+    if (nt > 0) {
+      geometry.reset(rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
+      // A SAH build the first time, a refit of it while the index buffer stays.
+      rtcSetGeometryBuildQuality(geometry.get(), RTC_BUILD_QUALITY_REFIT);
+      // Embree-owned buffers: it reads vertices 16 bytes at a time, which a
+      // tightly packed caller array does not allow at its end.
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0,
+                                                            RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
+      auto* f = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0,
+                                                               RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
+      if (v && f) {
+        std::memcpy(v, mesh.vertices.data(), nv * 3 * sizeof(float));
+        std::memcpy(f, mesh.triangles.data(), nt * 3 * sizeof(unsigned));
+        rtcCommitGeometry(geometry.get());
+        rtcAttachGeometry(scene.get(), geometry.get());
+        planes.compute(v, f, nt, threads_);
+      }
     }
-  });
-  if (!error.empty()) throw Error("glint: march \"exact\": " + error);
+    rtcCommitScene(scene.get());
+    errors_.rethrow();
+    geometry_ = std::move(geometry);
+    scene_ = std::move(scene);
+    planes_ = std::move(planes);
+    vertices_ = nv, triangles_ = nt;
+    broken_.clear();
+  }
+
+  // Where the vertices are the scene's already, there is nothing to do.
+  BvhWork refit(const std::vector<float>& vertices) {
+    if (!geometry_) return BvhWork::Reused;
+    float* held = vertex_data();
+    std::vector<uint8_t> moved(vertices_);
+    bool any = false;
+    for (size_t v = 0; v < vertices_; ++v) {
+      moved[v] = std::memcmp(held + 3 * v, vertices.data() + 3 * v, 3 * sizeof(float)) != 0;
+      any |= moved[v] != 0;
+    }
+    if (!any) return BvhWork::Reused;
+    try {
+      std::memcpy(held, vertices.data(), vertices.size() * sizeof(float));
+      rtcUpdateGeometryBuffer(geometry_.get(), RTC_BUFFER_TYPE_VERTEX, 0);
+      rtcCommitGeometry(geometry_.get());
+      rtcCommitScene(scene_.get());
+      errors_.rethrow();
+      planes_.compute(held, index_data(), triangles_, threads_, moved.data());
+    } catch (const std::exception& e) {
+      broken_ = e.what();
+      throw;
+    }
+    return BvhWork::Refit;
+  }
+
+  bool same_triangles(const std::vector<int32_t>& triangles) const {
+    if (triangles.size() != triangles_ * 3) return false;
+    return triangles_ == 0 || std::memcmp(index_data(), triangles.data(), triangles.size() * sizeof(int32_t)) == 0;
+  }
+
+  Image trace(const TraceInputs& in, const TraceOptions& opt, const Mat4& view_to_world, int threads) const;
+
+  mutable std::shared_mutex use;  // traces share it; build and refit take it alone
+  size_t vertices_ = 0, triangles_ = 0;
+
+  // What the getters read, under a lock of its own: a caller asking what the
+  // last update did (Blender's UI, say) must not wait out a rebuild in progress.
+  struct Summary {
+    BvhReport last;
+    size_t vertices = 0, triangles = 0;
+  };
+  BvhReport report(BvhWork work, std::chrono::steady_clock::time_point start) {
+    std::lock_guard<std::mutex> lock(summary_mu);
+    summary = {{work, elapsed_ms(start)}, vertices_, triangles_};
+    return summary.last;
+  }
+  Summary read_summary() const {
+    std::lock_guard<std::mutex> lock(summary_mu);
+    return summary;
+  }
+  std::string broken_;  // why the last refit failed; empty when the scene is whole
+
+ private:
+  float* vertex_data() const {
+    return static_cast<float*>(rtcGetGeometryBufferData(geometry_.get(), RTC_BUFFER_TYPE_VERTEX, 0));
+  }
+  unsigned* index_data() const {
+    return static_cast<unsigned*>(rtcGetGeometryBufferData(geometry_.get(), RTC_BUFFER_TYPE_INDEX, 0));
+  }
+
+  // For each query, the first hit along origin + t * dir (view space) for t
+  // in [0, tfar] that is not on a surface through the origin itself.
+  void first_hits(const Frame& frame, std::vector<Query>& queries, Own own) const {
+    if (wide_)
+      first_hits_k<16>(frame, queries, own);
+    else
+      first_hits_k<8>(frame, queries, own);
+  }
+  template <int K>
+  void first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const;
+  // The mirror rays of row y, then the rays back to the camera from their hits.
+  void trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y, Image& out) const;
+
+  mutable std::mutex summary_mu;
+  Summary summary;
+  int threads_;
+  bool wide_ = false;         // packets of 16
+  mutable ErrorSink errors_;  // before the device, which reports to it until released
+  DevicePtr device_;
+  ScenePtr scene_;
+  GeometryPtr geometry_;
+  Planes planes_;
+};
+
+template <int K>
+void ExactScene::Impl::first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const {
+  // Neighbouring pixels' rays go to Embree K at a time and share the BVH's
+  // upper levels. A packet is filled from the rays still looking, so a ray
+  // asked again (Own::Retry) waits for the next round instead of leaving its
+  // lane empty; each ray meets the same sequence of queries as if sent alone.
+  std::vector<Live> live, next;
+  live.reserve(queries.size());
+  for (uint32_t i = 0; i < queries.size(); ++i) {
+    Query& q = queries[i];
+    q.found = false;
+    Live r;
+    r.origin = frame.point(q.origin);
+    const D3 dir = frame.direction(q.dir);
+    r.dir[0] = float(dir.x), r.dir[1] = float(dir.y), r.dir[2] = float(dir.z);
+    r.scale = std::max(norm(q.origin), norm(r.origin)) + 1e-30;
+    r.tnear = 0.0;
+    r.query = i;
+    live.push_back(r);
+  }
+  // A handful of coplanar neighbours at most; past that the ray is skimming
+  // its own surface and reflects nothing.
+  for (int attempt = 0; attempt < 8 && !live.empty(); ++attempt) {
+    next.clear();
+    for (size_t first = 0; first < live.size(); first += K) {
+      const size_t n = std::min<size_t>(K, live.size() - first);
+      alignas(64) typename Packet<K>::RayHit rh;
+      alignas(64) int valid[K];
+      for (size_t k = 0; k < size_t(K); ++k) {
+        valid[k] = k < n ? -1 : 0;
+        if (k >= n) continue;
+        const Live& r = live[first + k];
+        rh.ray.org_x[k] = float(r.origin.x), rh.ray.org_y[k] = float(r.origin.y), rh.ray.org_z[k] = float(r.origin.z);
+        rh.ray.dir_x[k] = r.dir[0], rh.ray.dir_y[k] = r.dir[1], rh.ray.dir_z[k] = r.dir[2];
+        rh.ray.tnear[k] = float(r.tnear);
+        rh.ray.tfar[k] = float(queries[r.query].tfar);
+        rh.ray.time[k] = 0.0f;
+        rh.ray.mask[k] = 0xFFFFFFFFu;
+        rh.ray.id[k] = static_cast<unsigned>(k);
+        rh.ray.flags[k] = 0;
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+      }
+      SkipContext ctx;
+      ctx.planes = &planes_;
+      ctx.lanes = &live[first];
+      intersect<K>(valid, scene_.get(), &rh, &ctx, own);
+      for (size_t k = 0; k < n; ++k) {
+        Live& r = live[first + k];
+        Query& q = queries[r.query];
+        if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+        if (own == Own::Skip || planes_.distance(rh.hit.primID[k], r.origin) > kSurfaceTolerance * r.scale) {
+          q.found = true;
+          q.t = rh.ray.tfar[k];
+          continue;
+        }
+        // Step just past this hit: the next float of t, scaled so that it moves.
+        r.tnear = std::nextafter(rh.ray.tfar[k], std::numeric_limits<float>::infinity());
+        if (r.tnear < q.tfar) next.push_back(r);
+      }
+    }
+    live.swap(next);
+  }
+}
+
+namespace {
+
+// The plane clip z = -w, as an affine function of a view-space point.
+double near_side(const double* P, D3 p) {
+  return cpu::clip_row(P, 2, p.x, p.y, p.z) + cpu::clip_row(P, 3, p.x, p.y, p.z);
+}
+
+// Does the camera see `hit`? The segment from it towards the camera (the eye
+// for perspective, the view axis for orthographic cameras), as far as the
+// near plane, must be free of other surfaces: the answer where that needs no
+// ray, else Ask and the ray in `back`.
+enum class Sight { Seen, Unseen, Ask };
+Sight camera_ray(const MarchSetup& s, D3 hit, Query& back) {
+  D3 dir;
+  if (s.eye_kind == EyeKind::Direction) {
+    dir = {-double(s.eye[0]), -double(s.eye[1]), -double(s.eye[2])};
+  } else {
+    const D3 eye = s.eye_kind == EyeKind::Origin ? D3{0, 0, 0} : D3{s.eye[0], s.eye[1], s.eye[2]};
+    dir = eye + hit * -1.0;
+  }
+  const double len = norm(dir);
+  if (!(len > 0.0)) return Sight::Unseen;
+  dir = dir * (1.0 / len);
+  // near_side is affine along the segment: it reaches 0 at the near plane.
+  const double n0 = near_side(s.projd, hit), n1 = near_side(s.projd, hit + dir);
+  const double unbounded = s.eye_kind == EyeKind::Direction ? std::numeric_limits<float>::max() : len;
+  double tfar = n0 > 0.0 && n0 - n1 > 0.0 ? n0 / (n0 - n1) : unbounded;
+  if (s.eye_kind != EyeKind::Direction && tfar > len) tfar = len;
+  if (!(tfar > 0.0)) return Sight::Seen;
+  back = Query{hit, dir, tfar};
+  return Sight::Ask;
+}
+
+}  // namespace
+
+void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y,
+                                 Image& out) const {
+  using cpu::clip_row;
+  std::vector<Query> mirror, back;
+  std::vector<int> mirror_x, back_x;
+  for (int x = 0; x < out.width; ++x) {
+    float* o = out.px(x, y);
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    if (specular && !is_reflective(specular->px(x, y))) continue;
+    V3 from, unit_from, normal;
+    if (!cpu::read_origin(s, x, y, from, unit_from, normal)) continue;
+    const V3 pivot = cpu::normalize(cpu::reflect(unit_from, normal));
+    if (!cpu::finite(pivot)) continue;
+    mirror.push_back(Query{d3(from), d3(pivot), s.opt.max_distance});
+    mirror_x.push_back(x);
+  }
+  first_hits(frame, mirror, Own::Skip);
+  for (size_t i = 0; i < mirror.size(); ++i) {
+    const Query& q = mirror[i];
+    if (!q.found) continue;
+    const D3 hit = q.origin + q.dir * q.t;
+    const double* P = s.projd;
+    const double w = clip_row(P, 3, hit.x, hit.y, hit.z);
+    if (!(w > 0.0)) continue;
+    const double z = clip_row(P, 2, hit.x, hit.y, hit.z) / w;
+    const double u = clip_row(P, 0, hit.x, hit.y, hit.z) / w * 0.5 + 0.5;
+    const double v = clip_row(P, 1, hit.x, hit.y, hit.z) / w * 0.5 + 0.5;
+    if (!(z >= -1.0 && z <= 1.0 && u >= 0.0 && u < 1.0 && v >= 0.0 && v < 1.0)) continue;
+    Query ray{};
+    const Sight sight = camera_ray(s, hit, ray);
+    if (sight == Sight::Unseen) continue;
+    if (sight == Sight::Ask) {
+      back.push_back(ray);
+      back_x.push_back(mirror_x[i]);
+    }
+    // Written now, taken back below where a surface hides the hit.
+    float* o = out.px(mirror_x[i], y);
+    o[0] = float(u), o[1] = float(v), o[2] = o[3] = 1.0f;
+  }
+  first_hits(frame, back, Own::Retry);
+  for (size_t i = 0; i < back.size(); ++i) {
+    if (!back[i].found) continue;
+    float* o = out.px(back_x[i], y);
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+  }
+}
+
+Image ExactScene::Impl::trace(const TraceInputs& in, const TraceOptions& opt, const Mat4& view_to_world,
+                              int threads) const {
+  std::shared_lock<std::shared_mutex> lock(use);
+  if (!broken_.empty())
+    throw Error("glint: march \"exact\": the scene's last update failed (" + broken_ +
+                "); update it with its vertices and triangles to rebuild it");
+  const Frame frame(view_to_world);
+  const MarchSetup setup = cpu::make_setup(in.position, in.normal, in.projection, opt, nullptr);
+  // Every texel is written by its row.
+  Image out = Image::uninitialized(in.position.width, in.position.height);
+  parallel_rows(0, out.height, threads, [&](int y) { trace_row(frame, setup, in.specular, y, out); });
+  errors_.rethrow();
   return out;
 }
 
-}  // namespace glint::cpu
+namespace {
+void require_arrays(const TriangleMesh& mesh) {
+  if (mesh.scene) throw InvalidArgument("mesh", "expected vertices and triangles, got an ExactScene");
+  validate(mesh);
+}
+}  // namespace
+
+ExactScene::ExactScene(const TriangleMesh& mesh, int threads) {
+  const auto start = std::chrono::steady_clock::now();
+  require_arrays(mesh);
+  impl_ = std::make_unique<Impl>(threads);
+  impl_->build(mesh);
+  impl_->report(BvhWork::Built, start);
+}
+
+ExactScene::~ExactScene() = default;
+
+BvhReport ExactScene::update_vertices(const std::vector<float>& vertices) {
+  std::unique_lock<std::shared_mutex> lock(impl_->use);
+  const auto start = std::chrono::steady_clock::now();
+  if (vertices.size() != impl_->vertices_ * 3)
+    throw InvalidArgument("vertices", "expected " + std::to_string(impl_->vertices_) +
+                                          " vertices (the scene's; pass triangles too to change the mesh), got " +
+                                          std::to_string(vertices.size()) + " floats");
+  for (size_t k = 0; k < vertices.size(); ++k)
+    if (!std::isfinite(vertices[k]))
+      throw InvalidArgument("vertices", "vertex " + std::to_string(k / 3) + " is not finite");
+  if (!impl_->broken_.empty())
+    throw Error("glint: march \"exact\": the scene's last update failed (" + impl_->broken_ +
+                "); update it with its vertices and triangles to rebuild it");
+  return impl_->report(impl_->refit(vertices), start);
+}
+
+BvhReport ExactScene::update(const TriangleMesh& mesh) {
+  std::unique_lock<std::shared_mutex> lock(impl_->use);
+  const auto start = std::chrono::steady_clock::now();
+  require_arrays(mesh);
+  BvhWork work = BvhWork::Built;
+  if (impl_->broken_.empty() && mesh.vertices.size() == impl_->vertices_ * 3 &&
+      impl_->same_triangles(mesh.triangles))
+    work = impl_->refit(mesh.vertices);
+  else
+    impl_->build(mesh);
+  return impl_->report(work, start);
+}
+
+BvhReport ExactScene::last_update() const { return impl_->read_summary().last; }
+
+size_t ExactScene::vertex_count() const { return impl_->read_summary().vertices; }
+
+size_t ExactScene::triangle_count() const { return impl_->read_summary().triangles; }
+
+namespace cpu {
+
+Image trace_exact(const TraceInputs& in, const TraceOptions& opt, int threads) {
+  const TriangleMesh& mesh = *in.mesh;
+  validate_view_to_world(mesh.view_to_world);
+  if (mesh.scene) {
+    if (!mesh.vertices.empty() || !mesh.triangles.empty())
+      throw InvalidArgument("mesh", "expected either (vertices, triangles) or an ExactScene, got both");
+    return mesh.scene->impl().trace(in, opt, mesh.view_to_world, threads);
+  }
+  const ExactScene once(mesh, threads);
+  return once.impl().trace(in, opt, mesh.view_to_world, threads);
+}
+
+}  // namespace cpu
+}  // namespace glint
