@@ -2,8 +2,9 @@
 // triangles with Embree (3 or 4, whichever the distribution has), the answer
 // every screen-space march approximates, and the ExactScene that keeps its
 // BVH between calls (glint/exact_scene.h). Embree appears in no other file.
-// The rules are SPEC's: the first hit within max_distance, reported as
-// (u, v, 1, 1) only where the camera sees that point; no fades.
+// The rules (docs/marches.md, "The exact march"): the first hit within
+// max_distance, reported as (u, v, 1, 1) only where the camera sees that
+// point; no fades.
 #if GLINT_EMBREE_MAJOR >= 4
 #include <embree4/rtcore.h>
 #else
