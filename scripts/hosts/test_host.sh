@@ -2,14 +2,15 @@
 # Build the core and run the tests inside one host chroot (scripts/hosts/host.sh),
 # against that Debian's Blender, Python, numpy, Embree and OpenEXR.
 #   scripts/hosts/test_host.sh NAME [pytest paths...]
-# Default paths: $GLINT_HOST_TESTS, else the add-on and Blender suites. The
+# Default paths: $GLINT_HOST_TESTS, else the add-on and Blender suites and the
+# exact march's tests (Embree 4's calls differ from Debian 12's Embree 3). The
 # build goes to build/host-NAME in the checkout (kept between runs).
 set -uo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 name=${1:?usage: test_host.sh NAME [pytest paths...]}
 shift
 paths=("$@")
-if ((${#paths[@]} == 0)); then read -r -a paths <<<"${GLINT_HOST_TESTS:-tests/addon tests/blender}"; fi
+if ((${#paths[@]} == 0)); then read -r -a paths <<<"${GLINT_HOST_TESTS:-tests/addon tests/blender tests/python/test_exact.py tests/python/test_exact_scene.py}"; fi
 
 bash "$here/host.sh" make "$name" >/dev/null || exit 1
 bash "$here/host.sh" run "$name" bash -c '
