@@ -16,11 +16,12 @@ bash "$here/host.sh" make "$name" >/dev/null || exit 1
 bash "$here/host.sh" run "$name" bash -c '
   set -o pipefail
   build=/glint/build/host-$GLINT_HOST
+  mkdir -p "$build"
   echo "== $GLINT_HOST: $(cat /.glint-blender-version 2>/dev/null), $(python3 --version)"
   cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DGLINT_BUILD_TESTS=OFF \
-    -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_TOOLS=OFF >"$build.configure.log" 2>&1 ||
-    { cat "$build.configure.log"; echo "== $GLINT_HOST: configure failed"; exit 1; }
-  cmake --build "$build" -j"$(nproc)" >"$build.build.log" 2>&1 ||
-    { tail -40 "$build.build.log"; echo "== $GLINT_HOST: build failed"; exit 1; }
+    -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_TOOLS=OFF >"$build/configure.log" 2>&1 ||
+    { cat "$build/configure.log"; echo "== $GLINT_HOST: configure failed"; exit 1; }
+  cmake --build "$build" -j"$(nproc)" >"$build/build.log" 2>&1 ||
+    { tail -40 "$build/build.log"; echo "== $GLINT_HOST: build failed"; exit 1; }
   GLINT_BUILD_DIR=$build python3 -m pytest -q -p no:cacheprovider "$@"
 ' test_host "${paths[@]}"
