@@ -1,8 +1,14 @@
 """What Glint adds to one Eevee frame, stage by stage, next to what Eevee's own SSR adds.
 
 Builds a glossy floor (a dielectric, Principled Specular 0.5, Roughness 0.1) under a
-few coloured objects (a few thousand triangles), then renders the same frame, in one
-Blender process, alternating per round:
+few objects (a few thousand triangles), in one or both of two scenes:
+
+  matte     the objects coloured, Specular 0: only the floor reflects
+  default   the objects keep a new material's Principled defaults (Specular 0.5,
+            Roughness 0.5, grey), as most objects of a user's scene do: every
+            object is a rough reflector
+
+then renders each scene's frame, in one Blender process, alternating per round:
 
   plain   Eevee, Screen Space Reflections off, Glint off
   ssr     Eevee with its own reflections on, Glint off: Legacy's SSR (half-resolution
@@ -18,7 +24,7 @@ minus its stages and clear). Usage, from a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/frame_bench.py -- \
       [--size 1920x1080] [--rounds 3] [--samples 8] [--preset BALANCED] [--backend AUTO] \
-      [--addon <folder holding glint/>]
+      [--scenes matte,default] [--addon <folder holding glint/>]
 
 The add-on is registered from this checkout (or --addon, e.g. an older commit's
 ``git archive`` to compare); the core comes from GLINT_CORE_PATH
@@ -43,9 +49,20 @@ ROOT = os.path.dirname(HERE)
 def _args():
     return kit.script_options(
         {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO",
-         "addon": os.path.join(ROOT, "addon")},
+         "scenes": ["matte", "default"], "addon": os.path.join(ROOT, "addon")},
         {"size": kit.frame_size, "rounds": int, "samples": int, "preset": str.upper, "backend": str.upper,
-         "addon": os.path.abspath})
+         "scenes": _scene_names, "addon": os.path.abspath})
+
+
+SCENES = ("matte", "default")
+
+
+def _scene_names(value):
+    names = [v.strip() for v in value.split(",") if v.strip()]
+    unknown = [n for n in names if n not in SCENES]
+    if unknown or not names:
+        raise ValueError(f"--scenes {value}: choose among {','.join(SCENES)}")
+    return names
 
 
 _register_addon = kit.register_addon
@@ -54,7 +71,16 @@ _register_addon = kit.register_addon
 _material = kit.principled
 
 
-def build_scene(size, samples):
+def _object_material(name, colour, materials):
+    if materials == "default":  # a new material as Blender makes it: Principled defaults
+        from glint.host import data
+        mat = bpy.data.materials.new(name)
+        data.enable_nodes(mat)
+        return mat
+    return _material(name, colour, 0.5, specular=0.0)
+
+
+def build_scene(size, samples, materials="matte"):
     scene = bpy.context.scene
     for ob in list(scene.objects):
         bpy.data.objects.remove(ob)
@@ -82,7 +108,7 @@ def build_scene(size, samples):
     for op, kwargs, colour in objects:
         getattr(bpy.ops.mesh, op)(**kwargs)
         ob = bpy.context.object
-        ob.data.materials.append(_material(ob.name, colour, 0.5, specular=0.0))
+        ob.data.materials.append(_object_material(ob.name, colour, materials))
         bpy.ops.object.shade_smooth()
     bpy.ops.object.light_add(type="SUN", rotation=(math.radians(50), math.radians(10), math.radians(30)))
     bpy.context.object.data.energy = 3.0
@@ -112,9 +138,14 @@ def configure(scene, mode, opts):
 
 def main():
     opts = _args()
-    glint = _register_addon(opts["addon"])
+    _register_addon(opts["addon"])
+    for materials in opts["scenes"]:
+        bench_scene(opts, materials)
+
+
+def bench_scene(opts, materials):
     from glint.state import STATE
-    scene, tris = build_scene(opts["size"], opts["samples"])
+    scene, tris = build_scene(opts["size"], opts["samples"], materials)
     clear_ms = []
     from glint import compositor
 
@@ -157,7 +188,8 @@ def main():
     clear = statistics.median(clear_ms)
     added = med["glint"] - med["plain"]
     w, h = opts["size"]
-    print(f"\nframe_bench: Blender {bpy.app.version_string}, {w}x{h} Eevee, {opts['samples']} samples, {tris} triangles, "
+    print(f"\nframe_bench: scene {materials}, Blender {bpy.app.version_string}, {w}x{h} Eevee, "
+          f"{opts['samples']} samples, {tris} triangles, "
           f"preset {opts['preset']}, backend {opts['backend']} -> {'/'.join(sorted(backends))}, "
           f"medians of {opts['rounds']} rounds")
     print(f"  render, plain             {med['plain']:8.0f} ms")
