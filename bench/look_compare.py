@@ -1,7 +1,8 @@
 """How Glint's reflections compare with Cycles' and with Eevee's own SSR, per scene.
 
-Builds four sample scenes of its own (a glossy floor under coloured objects, the same
-floor at roughness 0.3, a metal sphere in a room, a grazing corridor) and, for each,
+Builds five sample scenes of its own (a glossy floor under coloured objects, the same
+floor at roughness 0.3, a metal sphere in a room, a grazing corridor, the glossy floor
+under objects that keep a new material's Principled defaults) and, for each,
 isolates the reflections of the objects three ways:
 
   cycles  Cycles, every mesh visible to glossy rays minus the same frame with them all
@@ -24,7 +25,7 @@ a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
       [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
-      [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor] \\
+      [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor,default] \\
       [--cycles-cache DIR]
 
 --cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
@@ -54,7 +55,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import blender_scene_kit as kit  # noqa: E402
 ROOT = os.path.dirname(HERE)
-SCENES = ("floor", "rough", "metal", "corridor")
+SCENES = ("floor", "rough", "metal", "corridor", "default")
 METHODS = ("cycles", "ssr", "glint")
 LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)  # Rec. 709, Blender's linear primaries
 # Isolated reflections are signed (an object replaces the sky it hides): shown as
@@ -136,19 +137,33 @@ def _camera(location, rotation_deg, lens=50.0):
     bpy.context.scene.camera = cam
 
 
-def _floor_scene(roughness):
+def _default_material(name, colour=None):
+    """A material as Blender makes a new one: Principled defaults (grey, Specular
+    0.5, Roughness 0.5), a rough dielectric reflector; ``colour`` is not used."""
+    from glint.host import data
+    mat = bpy.data.materials.new(name)
+    data.enable_nodes(mat)
+    return mat
+
+
+def _floor_scene(roughness, objects_material=None):
+    """A glossy floor under four objects, matte (Specular 0) unless
+    ``objects_material`` makes their materials."""
+    made = objects_material or _diffuse
     floor = _plane("Glossy Floor", 16.0, (0, 0, 0), (0, 0, 0), _material("Floor", (0.2, 0.2, 0.22), roughness))
-    _add("primitive_uv_sphere_add", _diffuse("Red", (0.8, 0.05, 0.03)),
-         radius=0.8, location=(0, 0, 0.8), segments=48, ring_count=24)
-    _add("primitive_cube_add", _diffuse("Green", (0.05, 0.6, 0.08)), smooth=False,
-         size=1.1, location=(-2.3, 1.0, 0.55))
-    _add("primitive_cylinder_add", _diffuse("Blue", (0.05, 0.1, 0.8)),
-         radius=0.5, depth=1.6, location=(2.3, 1.0, 0.8), vertices=48)
-    _add("primitive_torus_add", _diffuse("Yellow", (0.9, 0.7, 0.05)),
-         location=(0.8, 2.6, 0.25), major_radius=0.8, minor_radius=0.25)
+    objects = [
+        _add("primitive_uv_sphere_add", made("Red", (0.8, 0.05, 0.03)),
+             radius=0.8, location=(0, 0, 0.8), segments=48, ring_count=24),
+        _add("primitive_cube_add", made("Green", (0.05, 0.6, 0.08)), smooth=False,
+             size=1.1, location=(-2.3, 1.0, 0.55)),
+        _add("primitive_cylinder_add", made("Blue", (0.05, 0.1, 0.8)),
+             radius=0.5, depth=1.6, location=(2.3, 1.0, 0.8), vertices=48),
+        _add("primitive_torus_add", made("Yellow", (0.9, 0.7, 0.05)),
+             location=(0.8, 2.6, 0.25), major_radius=0.8, minor_radius=0.25),
+    ]
     _sun((50, 10, 30))
     _camera((0.0, -7.5, 2.2), (78, 0, 0))
-    return [floor]
+    return [floor] + (objects if objects_material else [])
 
 
 def _metal_scene():
@@ -199,6 +214,7 @@ BUILDERS = {
     "rough": lambda: _floor_scene(0.3),
     "metal": _metal_scene,
     "corridor": _corridor_scene,
+    "default": lambda: _floor_scene(0.1, _default_material),
 }
 
 

@@ -11,6 +11,19 @@ export GLINT_TEST_OUT=${GLINT_TEST_OUT:-$GLINT_BUILD_DIR/test-out}
 [[ "${GLINT_SKIP_FUZZ:-0}" != 1 ]] && export GLINT_WITH_FUZZERS=1
 bash "$root/scripts/setup.sh" || exit 1
 
+# The newer Blenders (scripts/hosts/hosts.conf: Debian 13's 4.3, sid's 5.2),
+# each in a chroot of its own, cached outside the checkout. GLINT_HOSTS picks
+# which ("trixie", "trixie sid", "none"); GLINT_HOST_TESTS which suites.
+# A chroot not yet made is made in the background from here (debootstrap and
+# apt wait on the network more than on the CPU) while the C++ tests run;
+# test_host.sh waits for it (host.sh holds a lock per host while making one).
+hosts=${GLINT_HOSTS:-$(bash "$root/scripts/hosts/host.sh" list | tr '\n' ' ')}
+mkdir -p "$GLINT_TEST_OUT"
+for h in $hosts; do
+  [[ $h == none ]] && continue
+  bash "$root/scripts/hosts/host.sh" make "$h" >"$GLINT_TEST_OUT/host-$h.make.log" 2>&1 &
+done
+
 status=0
 echo "== ctest"
 ctest --test-dir "$GLINT_BUILD_DIR" --output-on-failure -j2 || status=1
@@ -38,14 +51,11 @@ for d in tests/python tests/addon tests/blender; do
 done
 /usr/bin/python3 -m pytest -q -p no:cacheprovider "${suites[@]}" || status=1
 
-# The newer Blenders (scripts/hosts/hosts.conf: Debian 13's 4.3, sid's 5.2),
-# each in a chroot of its own, cached outside the checkout. GLINT_HOSTS picks
-# which ("trixie", "trixie sid", "none"); GLINT_HOST_TESTS which suites.
-hosts=${GLINT_HOSTS:-$(bash "$root/scripts/hosts/host.sh" list | tr '\n' ' ')}
 for h in $hosts; do
   [[ $h == none ]] && continue
   echo "== pytest on host $h"
   bash "$root/scripts/hosts/test_host.sh" "$h" || status=1
 done
+wait  # a background make that test_host.sh did not need (its host failed earlier)
 
 exit $status

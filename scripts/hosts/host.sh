@@ -67,11 +67,14 @@ make_host() {
   dir=$(chroot_path "$name")
   suite=$(conf_line "$name" | awk '{print $2}')
   if [[ -f $dir/.glint-ready ]]; then echo "$dir"; return; fi
-  command -v debootstrap >/dev/null || {
+  mkdir -p "$cache"
+  # Hosts are made side by side (scripts/test.sh): one apt at a time.
+  command -v debootstrap >/dev/null || (
+    flock 8
+    command -v debootstrap >/dev/null && exit 0
     echo "host.sh: installing debootstrap" >&2
     apt-get update -qq >&2 && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq debootstrap >&2
-  }
-  mkdir -p "$cache"
+  ) 8>"$cache/.lock-apt"
   exec 9>"$cache/.lock-$name"
   flock 9
   if [[ -f $dir/.glint-ready ]]; then echo "$dir"; return; fi

@@ -23,5 +23,5 @@ bash "$here/host.sh" run "$name" bash -c '
     { cat "$build/configure.log"; echo "== $GLINT_HOST: configure failed"; exit 1; }
   cmake --build "$build" -j"$(nproc)" >"$build/build.log" 2>&1 ||
     { tail -40 "$build/build.log"; echo "== $GLINT_HOST: build failed"; exit 1; }
-  GLINT_BUILD_DIR=$build python3 -m pytest -q -p no:cacheprovider "$@"
+  GLINT_BUILD_DIR=$build python3 -m pytest -q -p no:cacheprovider --durations=15 "$@"
 ' test_host "${paths[@]}"
