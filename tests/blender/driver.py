@@ -22,7 +22,11 @@ import scene_config  # noqa: E402  (beside this file)
 
 scene_config.apply(scene, cfg)
 r = scene.render
-r.image_settings.file_format = cfg.get("exr", "OPEN_EXR")
+if cfg.get("exr") == "OPEN_EXR_MULTILAYER":
+    from glint.host import nodes as host_nodes  # 5.0+ asks for the media type first
+    host_nodes.set_multilayer_exr(r.image_settings)
+else:
+    r.image_settings.file_format = cfg.get("exr", "OPEN_EXR")
 if r.image_settings.file_format.startswith("OPEN_EXR"):
     r.image_settings.color_depth = "32"
     r.image_settings.exr_codec = "ZIP"

@@ -221,8 +221,9 @@ user.nodes.new('ShaderNodeMath')
 s = bpy.context.scene
 s.glint.enabled = True
 res = {}
-def compositor_groups():
-    return sorted(g.name for g in bpy.data.node_groups if g.bl_idname == 'CompositorNodeTree')
+def compositor_groups():  # the scene's own tree is a compositor node group too on 5.x: not counted
+    scene_tree = getattr(s, 'compositing_node_group', None)
+    return sorted(g.name for g in bpy.data.node_groups if g.bl_idname == 'CompositorNodeTree' and g != scene_tree)
 res['on'] = compositor_groups()
 try:  # what render_init does on F12's render thread: nothing may be missing now
     compositor.ensure(s, allow_changes=False)

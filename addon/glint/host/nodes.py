@@ -333,13 +333,19 @@ def set_rgb_value(node, value) -> None:
 # The layers EXR (File Output): 5.0 renamed its folder and slots
 
 
+def set_multilayer_exr(fmt) -> None:
+    """Image settings for a multilayer EXR: 5.0 offers OPEN_EXR_MULTILAYER only
+    once the media type is a multi-layer image."""
+    if hasattr(fmt, "media_type"):
+        fmt.media_type = "MULTI_LAYER_IMAGE"
+    fmt.file_format = "OPEN_EXR_MULTILAYER"
+
+
 def new_exr_output(tree, slots, location):
     node = tree.nodes.new("CompositorNodeOutputFile")
     node.location = location
     fmt = node.format
-    if hasattr(fmt, "media_type"):
-        fmt.media_type = "MULTI_LAYER_IMAGE"
-    fmt.file_format = "OPEN_EXR_MULTILAYER"
+    set_multilayer_exr(fmt)
     fmt.color_depth = "32"
     fmt.exr_codec = "ZIP"
     if hasattr(node, "file_output_items"):
