@@ -223,7 +223,7 @@ def scene_reflectors(scene) -> Tuple[int, bool]:
                 continue
             if mat.name not in reflective_of:
                 spec, _ = gather.material_info(mat)
-                reflective_of[mat.name] = (spec.amount > 0, spec.amount > 0 and spec.alpha < 1.0)
+                reflective_of[mat.name] = (spec.reflective, spec.reflective and spec.alpha < 1.0)
             r, g = reflective_of[mat.name]
             reflects = reflects or r
             rough = rough or g

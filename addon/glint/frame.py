@@ -21,7 +21,7 @@ import numpy as np
 
 from . import compositor, gather, native
 from .host import nodes as host_nodes
-from .logic import compositing, geometry, reduced, settings as settings_logic
+from .logic import compositing, geometry, reduced, settings as settings_logic, texels
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
 
@@ -282,7 +282,7 @@ def _upsample(frame: FrameState, uv, weight):
     position, normal, specular = frame.position, frame.normal, frame.specular
     lod = weight[..., 3]
     lod[lod > 0] += np.float32(np.log2(frame.factor))  # the footprint in frame pixels is `factor` times larger
-    refl = compositing.reflective_mask(position, specular)
+    refl = texels.reflective_mask(position, specular)
     stretched = [uv, weight]
     if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
         stretched += [position, normal, specular]

@@ -82,6 +82,8 @@ from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
+from . import texels
+
 # Image data-blocks the group reads (filled by the add-on before compositing).
 IMAGE_UV = "Glint UV"
 IMAGE_WEIGHT = "Glint Weight"
@@ -377,35 +379,6 @@ def use_second_bounce(mode: str, reflective_objects: int) -> bool:
 # Images handed to the compositor
 
 
-# These run on every pixel of every frame (2 M at 1920x1080): one pass per
-# channel over strided views, no reductions along the last axis, no temporaries
-# of the whole [h, w, 4] array that are not handed on.
-
-
-def specular_amount(specular: np.ndarray) -> np.ndarray:
-    """The core's specular amount: mean of rgb; non-finite counts as zero."""
-    s = np.asarray(specular, dtype=np.float32)
-    amount = s[..., 0] + s[..., 1]
-    amount += s[..., 2]
-    amount /= np.float32(3.0)
-    amount[~np.isfinite(amount)] = 0.0
-    return amount
-
-
-def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
-    """Pixels the core would trace: seen (w = 1, finite) with a positive specular amount."""
-    p = np.asarray(position, dtype=np.float32)
-    # A sum of the four channels is finite exactly when each is (NaN and inf
-    # propagate), short of an overflow past 3e38, which no position reaches.
-    total = p[..., 0] + p[..., 1]
-    total += p[..., 2]
-    total += p[..., 3]
-    seen = p[..., 3] > 0.5
-    seen &= np.isfinite(total)
-    seen &= specular_amount(specular) > 0
-    return seen
-
-
 # Pixels kept around the region's hits: Map UV estimates each pixel's uv
 # derivatives from its neighbours' uv (bilinear reads one pixel away), and a hit
 # at the region's edge must see the same neighbours as in the whole frame. With
@@ -469,7 +442,7 @@ def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
     """The RGBA picture of a G-buffer layer for the debug view (alpha 1)."""
     h, w = np.asarray(position).shape[:2]
     out = np.zeros((h, w, 4), np.float32)
-    seen = np.asarray(position)[..., 3] > 0.5
+    seen = texels.texel_seen(position)
     if view == "POSITION":
         out[..., :3] = np.asarray(position)[..., :3]
     elif view == "NORMAL":
