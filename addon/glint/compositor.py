@@ -223,7 +223,7 @@ def scene_reflectors(scene) -> Tuple[int, bool]:
                 continue
             if mat.name not in reflective_of:
                 spec, _ = gather.material_info(mat)
-                reflective_of[mat.name] = (spec.amount > 0, spec.amount > 0 and spec.alpha < 1.0)
+                reflective_of[mat.name] = (spec.reflective, spec.reflective and spec.alpha < 1.0)
             r, g = reflective_of[mat.name]
             reflects = reflects or r
             rough = rough or g
@@ -273,6 +273,40 @@ def _group_is_current(group) -> bool:
     return True
 
 
+def _ensure_render_layers_node(tree, scene, view_layer, change):
+    """The Render Layers node of ``view_layer``, made if the tree has none."""
+    rl = _render_layers_node(tree, scene, view_layer)
+    if rl is None:
+        change(f"no Render Layers node for view layer {view_layer.name!r}")
+        rl = tree.nodes.new("CompositorNodeRLayers")
+        rl.scene = scene
+        rl.layer = view_layer.name
+        rl.location = (-300, 0)
+    return rl
+
+
+def _ensure_group_node(tree, group, rl, change):
+    """The scene tree's Glint node, using ``group``; a new one takes over every
+    link the Render Layers node's image fed, so everything that read the
+    render's image now reads the composited one."""
+    gnode = tree.nodes.get(cg.GROUP_NODE_NAME)
+    if gnode is None or gnode.bl_idname != "CompositorNodeGroup":
+        change("the Glint node is missing from the compositor")
+        gnode = tree.nodes.new("CompositorNodeGroup")
+        gnode.name = cg.GROUP_NODE_NAME
+        gnode.label = "Glint Reflections"
+        gnode.node_tree = group
+        gnode.location = (rl.location.x + 300, rl.location.y)
+        for link in list(rl.outputs["Image"].links):
+            to_socket = link.to_socket
+            tree.links.remove(link)
+            tree.links.new(gnode.outputs["Image"], to_socket)
+    elif gnode.node_tree != group:
+        change("the Glint node uses another node group")
+        gnode.node_tree = group
+    return gnode
+
+
 def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     """Put the group in the scene's compositor (idempotent). Returns a sentence
     naming what Glint had to turn on for its reflections to reach the frame (an
@@ -302,29 +336,8 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
         change("Glint's node group is missing or out of date")
         group = build_group()
     view_layer = target_view_layer(scene)
-    rl = _render_layers_node(tree, scene, view_layer)
-    if rl is None:
-        change(f"no Render Layers node for view layer {view_layer.name!r}")
-        rl = tree.nodes.new("CompositorNodeRLayers")
-        rl.scene = scene
-        rl.layer = view_layer.name
-        rl.location = (-300, 0)
-    gnode = tree.nodes.get(cg.GROUP_NODE_NAME)
-    if gnode is None or gnode.bl_idname != "CompositorNodeGroup":
-        change("the Glint node is missing from the compositor")
-        gnode = tree.nodes.new("CompositorNodeGroup")
-        gnode.name = cg.GROUP_NODE_NAME
-        gnode.label = "Glint Reflections"
-        gnode.node_tree = group
-        gnode.location = (rl.location.x + 300, rl.location.y)
-        # Everything that read the render's image now reads the composited one.
-        for link in list(rl.outputs["Image"].links):
-            to_socket = link.to_socket
-            tree.links.remove(link)
-            tree.links.new(gnode.outputs["Image"], to_socket)
-    elif gnode.node_tree != group:
-        change("the Glint node uses another node group")
-        gnode.node_tree = group
+    rl = _ensure_render_layers_node(tree, scene, view_layer, change)
+    gnode = _ensure_group_node(tree, group, rl, change)
     # The frame is what the Composite node (5.0+: the Group Output) receives:
     # a tree without one (an old file's Viewer-only tree) would write the bare
     # render, or refuse to render.

@@ -4,14 +4,24 @@ Called from the render's ``frame_change_post`` handler with the render's own
 evaluated depsgraph (never ``bpy.context``). Returns a :class:`state.FrameReport`;
 raises nothing for expected failures (missing module, GL, core errors): those
 become a report and the frame renders without reflections.
+
+:func:`run` takes the frame through four steps, each reading and writing one
+:class:`FrameState` (one per render, so nothing of a frame lives in module
+globals): :func:`export` (the scene's triangles), :func:`plan` (backend and
+trace options), :func:`compute` (G-buffer and composite layers, retried at
+fewer pixels when the core refuses the memory) and :func:`publish` (the
+compositor's images).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional, Tuple
 
 import numpy as np
 
 from . import compositor, gather, native
 from .host import nodes as host_nodes
-from .logic import compositing, geometry, reduced, settings as settings_logic
+from .logic import compositing, geometry, reduced, settings as settings_logic, texels
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
 
@@ -61,10 +71,54 @@ def resolve_backend(core, requested: str) -> str:
         return "cpu"
 
 
+@dataclass
+class FrameState:
+    """One frame on its way through the steps below: what each step leaves for
+    the next. The render thread makes one per render (:func:`run`), so two
+    renders never share a frame's state and nothing of it outlives the call."""
+
+    core: object
+    values: dict  # settings_dict() of the scene
+    report: FrameReport
+    timings: Timings
+    progress: Progress
+    exp: Optional[gather.SceneExport] = None
+    requested: str = ""  # the backend the settings name ('auto', 'gl', 'cpu')
+    backend: str = ""  # the one plan() chose for the first try
+    kwargs: dict = field(default_factory=dict)  # the trace's, from the settings and the core's presets
+    back_layer: bool = False
+    factor: int = 1  # the frame traced at 1/factor of its width and height
+    tried: int = 1  # the last resolution factor the core refused for memory
+    first_refusal: Tuple[int, int] = (0, 0)  # (needed, limit) bytes of the full-size refusal
+    # The G-buffer and the composite's layers, as compute() left them; publish()
+    # stretches them back to the frame's size when the frame was reduced.
+    position: Optional[np.ndarray] = None
+    normal: Optional[np.ndarray] = None
+    specular: Optional[np.ndarray] = None
+    layers: Optional[dict] = None
+
+    @property
+    def camera(self) -> gather.CameraInfo:
+        return self.exp.camera
+
+    @property
+    def memory_refused(self):
+        """The core's refusal for memory (nothing to catch from a core without it)."""
+        return getattr(self.core, "MemoryLimitExceeded", ())
+
+    def note(self, message: str) -> None:
+        """Add a clause to the report's message."""
+        self.report.message = "; ".join(filter(None, [self.report.message, message]))
+
+    def skip(self, message: str) -> bool:
+        """Mark the frame skipped, ``message`` saying why; False, for the step to return."""
+        self.report.status, self.report.message = "skipped", message
+        return False
+
+
 def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport:
     """Export, rasterize and trace the frame; fill the compositor's images."""
-    glint = scene.glint
-    values = settings_dict(glint)
+    values = settings_dict(scene.glint)
     report = FrameReport(frame=depsgraph.scene_eval.frame_current)
     timings = Timings()
     core = native.load()
@@ -75,132 +129,15 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         report.status, report.message = "skipped", compositing.TRUE_REFLECTION_NOTE
         return report
     progress = Progress(0, report=progress_report, should_stop=should_stop, label="Glint export")
-    memory_refused = getattr(core, "MemoryLimitExceeded", ())
-    tried = 1  # the last resolution factor the core refused for memory
+    frame = FrameState(core, values, report, timings, progress)
+    memory_refused = frame.memory_refused
     try:
-        with timings.measure("export"):
-            exp = gather.export_scene(depsgraph, progress, max_distance=values["max_distance"])
-        cam = exp.camera
-        report.width, report.height = cam.width, cam.height
-        report.objects, report.culled = exp.objects, exp.culled
-        report.message = exp.skipped_text()
-        report.triangles = exp.triangles.count
-        if not exp.any_reflective:
-            report.status, report.message = "skipped", "no reflective material in view: no mesh exported, no trace"
-            report.timings_ms = timings.ms
-            return report
-        requested = settings_logic.backend_name(values["backend"])
-        with timings.measure("rasterize"):
-            # Auto takes the CPU where it measured faster, without even making
-            # a GL context (the first costs ~0.2 s per process): docs/addon.md.
-            choice = settings_logic.auto_backend(cam.width * cam.height, report.triangles) \
-                if requested == "auto" else requested
-            backend = resolve_backend(core, choice)
-            kwargs = settings_logic.trace_kwargs(values, core.presets())
-            back_layer = core.march_details()[kwargs["march"]]["uses_back_position"]
-
-        def attempt(size):
-            """(position, normal, specular, layers) at ``size`` (None: the frame's),
-            layers as ``core.composite_layers`` returns them; None when no pixel reflects."""
-            kw = dict(kwargs, **settings_logic.look_kwargs(values))
-            with timings.measure("rasterize"):
-                gbuf, used = settings_logic.with_cpu_fallback(
-                    lambda b: rasterize(core, exp, b, back_layer, size), backend, requested, log)
-            progress.check()
-            position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
-            report.backend = used
-            if back_layer:
-                kw["back_position"] = gbuf["back_position"]
-            kw.update(mesh_kwargs(core, exp, kw["march"]))
-            if used == "gl" and not core.march_details()[kw["march"]]["gl"]:
-                log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
-            proj32 = cam.projection.astype(np.float32)
-            with timings.measure("trace"):
-                # One call for all the composite needs that does not depend on the
-                # frame's colour (the uv image, each pixel's weight and blur level):
-                # the G-buffer crosses into the core once. Pixels that do not
-                # reflect are not traced; the normals of what they show stay, for
-                # the rays that hit them.
-                layers, used = settings_logic.with_cpu_fallback(
-                    lambda b: core.composite_layers(position, normal, specular, proj32, backend=b, **kw),
-                    used, requested, log)
-            report.backend = used
-            report.reflective_pixels = int(layers["reflective_pixels"])
-            if report.reflective_pixels == 0:
-                return None
-            return position, normal, specular, layers
-
-        # A refusal for memory (rasterize, trace, the exact march's mesh) retries
-        # with fewer pixels down to a floor before the frame goes without: logic/reduced.py.
-        factor = 1
-        while True:
-            try:
-                traced = attempt(None if factor == 1 else reduced.reduced_size(cam.width, cam.height, factor))
-                break
-            except memory_refused as exc:
-                tried = factor
-                needed, limit = getattr(exc, "needed_bytes", 0), getattr(exc, "limit_bytes", 0)
-                if factor == 1:
-                    first_refusal = (needed, limit)
-                factor = reduced.next_factor(factor, needed, limit)
-                if factor is None:
-                    raise
-                log(f"frame {report.frame}: {reduced.retrying(cam.width, cam.height, tried, factor)}")
-        if traced is None:
-            report.status, report.message = "skipped", "no reflective pixel on screen: no trace"
-            report.timings_ms = timings.ms
-            return report
-        position, normal, specular, layers = traced
-        uv, weight = layers["uv"], layers["weight"]
-        if not layers["any_rough"]:
-            report.message = "; ".join(filter(None, [report.message, "no rough reflection: blur not needed"]))
-        if STATE.second_bounce is False:
-            report.message = "; ".join(filter(None, [report.message, "second bounce not run"]))
-        if factor > 1:
-            with timings.measure("upsample"):
-                lod = weight[..., 3]
-                lod[lod > 0] += np.float32(np.log2(factor))  # the footprint in frame pixels is `factor` times larger
-                # The compositor reads the uv and the weight at the frame's size; the
-                # G-buffer only for a debug view or the layers EXR (else it stays
-                # reduced: fewer frame-size images when memory is short).
-                refl = compositing.reflective_mask(position, specular)
-                stretched = [uv, weight]
-                if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
-                    stretched += [position, normal, specular]
-                stretched = [reduced.upsample_nearest(a, cam.width, cam.height) for a in stretched]
-                uv, weight = stretched[:2]
-                if len(stretched) == 5:
-                    position, normal, specular = stretched[2:]
-                report.reflective_pixels = int(np.count_nonzero(reduced.upsample_nearest(refl, cam.width,
-                                                                                        cam.height)))
-            note = reduced.describe(cam.width, cam.height, factor, *first_refusal)
-            report.message = "; ".join(m for m in (report.message, note) if m)
-            log(f"frame {report.frame}: {note}")
-        progress.check()
-        with timings.measure("images"):
-            view = values["debug_view"]
-            # The group composites only the region that can change; a debug
-            # view or the layers EXR shows the uv and vis of the whole frame,
-            # and so does a compositor that cannot place a region (host/nodes).
-            if view != "NONE" or values["write_layers_exr"] or not host_nodes.compositor_places_regions():
-                region = (0, 0, cam.width, cam.height)
-            else:
-                region = compositing.image_region(uv[..., 2], weight[..., 3])
-            images = compositing.region_images(uv, weight, region)
-            report.region = region
-            if view in compositing.GBUFFER_DEBUG_VIEWS:
-                images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
-            if values["write_layers_exr"]:
-                images[compositing.IMAGE_POSITION] = position
-                n4 = np.array(normal, dtype=np.float32, copy=True)
-                n4[..., 3] = 1.0
-                images[compositing.IMAGE_NORMAL] = n4
-                images[compositing.IMAGE_SPECULAR] = specular
-            compositor.fill_images(images)
-        with STATE.lock:
-            STATE.arrays = {"position": position, "normal": normal, "specular": specular, "uv": uv,
-                            "projection": cam.projection, "view": cam.view, "frame": report.frame}
-        report.status = "ok"
+        # export and compute return False when the frame goes without
+        # reflections for a reason the report gives (a skip, not an error).
+        if export(frame, depsgraph):
+            plan(frame)
+            if compute(frame):
+                publish(frame)
     except Cancelled as exc:
         report.status, report.message = "cancelled", str(exc)
     except gather.SkipFrame as exc:
@@ -211,9 +148,171 @@ def run(depsgraph, scene, should_stop=None, progress_report=None) -> FrameReport
         # Refused from its sizes before anything was allocated, at full size and
         # down to the floor: the render goes on without reflections, and the
         # message says how much and how to raise the limit.
+        cam = frame.camera
         report.status = "error"
-        report.message = f"over Glint's memory limit ({reduced.gave_up(cam.width, cam.height, tried)}): {exc}"
+        report.message = f"over Glint's memory limit ({reduced.gave_up(cam.width, cam.height, frame.tried)}): {exc}"
     except (ValueError, RuntimeError, MemoryError) as exc:
         report.status, report.message = "error", f"{type(exc).__name__}: {exc}"
     report.timings_ms = timings.ms
     return report
+
+
+def export(frame: FrameState, depsgraph) -> bool:
+    """The scene's view-space triangles and materials (gather.py). False when no
+    reflective material is in view: then no mesh was fetched and nothing is traced."""
+    report = frame.report
+    with frame.timings.measure("export"):
+        exp = gather.export_scene(depsgraph, frame.progress, max_distance=frame.values["max_distance"])
+    frame.exp = exp
+    report.width, report.height = exp.camera.width, exp.camera.height
+    report.objects, report.culled = exp.objects, exp.culled
+    report.message = exp.skipped_text()
+    report.triangles = exp.triangles.count
+    if not exp.any_reflective:
+        return frame.skip("no reflective material in view: no mesh exported, no trace")
+    return True
+
+
+def plan(frame: FrameState) -> None:
+    """The backend, the trace's options and whether the march wants the back-face
+    layer. Timed as rasterize: choosing GL makes its context."""
+    core, cam = frame.core, frame.camera
+    frame.requested = requested = settings_logic.backend_name(frame.values["backend"])
+    with frame.timings.measure("rasterize"):
+        # Auto takes the CPU where it measured faster, without even making
+        # a GL context (the first costs ~0.2 s per process): docs/addon.md.
+        choice = settings_logic.auto_backend(cam.width * cam.height, frame.report.triangles) \
+            if requested == "auto" else requested
+        frame.backend = resolve_backend(core, choice)
+        frame.kwargs = settings_logic.trace_kwargs(frame.values, core.presets())
+        frame.back_layer = core.march_details()[frame.kwargs["march"]]["uses_back_position"]
+
+
+def compute(frame: FrameState) -> bool:
+    """Rasterize and trace the frame, at full size or, when the core refuses it
+    for memory, at fewer pixels (logic/reduced.py). False when no pixel reflects."""
+    cam, report = frame.camera, frame.report
+    memory_refused = frame.memory_refused
+    # A refusal for memory (rasterize, trace, the exact march's mesh) retries
+    # with fewer pixels down to a floor before the frame goes without.
+    while True:
+        size = None if frame.factor == 1 else reduced.reduced_size(cam.width, cam.height, frame.factor)
+        try:
+            traced = _rasterize_and_trace(frame, size)
+            break
+        except memory_refused as exc:
+            frame.tried = factor = frame.factor
+            needed, limit = getattr(exc, "needed_bytes", 0), getattr(exc, "limit_bytes", 0)
+            if factor == 1:
+                frame.first_refusal = (needed, limit)
+            frame.factor = reduced.next_factor(factor, needed, limit)
+            if frame.factor is None:
+                raise
+            log(f"frame {report.frame}: {reduced.retrying(cam.width, cam.height, factor, frame.factor)}")
+    if not traced:
+        return frame.skip("no reflective pixel on screen: no trace")
+    return True
+
+
+def _rasterize_and_trace(frame: FrameState, size) -> bool:
+    """The G-buffer at ``size`` (None: the frame's) and the composite's layers
+    (``core.composite_layers``), into ``frame``; False when no pixel reflects."""
+    core, exp, report = frame.core, frame.exp, frame.report
+    kw = dict(frame.kwargs, **settings_logic.look_kwargs(frame.values))
+    with frame.timings.measure("rasterize"):
+        gbuf, used = settings_logic.with_cpu_fallback(
+            lambda b: rasterize(core, exp, b, frame.back_layer, size), frame.backend, frame.requested, log)
+    frame.progress.check()
+    position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
+    report.backend = used
+    if frame.back_layer:
+        kw["back_position"] = gbuf["back_position"]
+    kw.update(mesh_kwargs(core, exp, kw["march"]))
+    if used == "gl" and not core.march_details()[kw["march"]]["gl"]:
+        log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
+    proj32 = exp.camera.projection.astype(np.float32)
+    with frame.timings.measure("trace"):
+        # One call for all the composite needs that does not depend on the
+        # frame's colour (the uv image, each pixel's weight and blur level):
+        # the G-buffer crosses into the core once. Pixels that do not
+        # reflect are not traced; the normals of what they show stay, for
+        # the rays that hit them.
+        layers, used = settings_logic.with_cpu_fallback(
+            lambda b: core.composite_layers(position, normal, specular, proj32, backend=b, **kw),
+            used, frame.requested, log)
+    report.backend = used
+    report.reflective_pixels = int(layers["reflective_pixels"])
+    if report.reflective_pixels == 0:
+        return False
+    frame.position, frame.normal, frame.specular, frame.layers = position, normal, specular, layers
+    return True
+
+
+def publish(frame: FrameState) -> None:
+    """Hand the frame's layers on: the compositor's images, and the arrays the
+    debug operators and tests read (``STATE.arrays``)."""
+    report, cam = frame.report, frame.camera
+    uv, weight = frame.layers["uv"], frame.layers["weight"]
+    if not frame.layers["any_rough"]:
+        frame.note("no rough reflection: blur not needed")
+    if STATE.second_bounce is False:
+        frame.note("second bounce not run")
+    position, normal, specular = frame.position, frame.normal, frame.specular
+    if frame.factor > 1:
+        with frame.timings.measure("upsample"):
+            uv, weight, position, normal, specular = _upsample(frame, uv, weight)
+        note = reduced.describe(cam.width, cam.height, frame.factor, *frame.first_refusal)
+        frame.note(note)
+        log(f"frame {report.frame}: {note}")
+    frame.progress.check()
+    with frame.timings.measure("images"):
+        _fill_images(frame, uv, weight, position, normal, specular)
+    with STATE.lock:
+        STATE.arrays = {"position": position, "normal": normal, "specular": specular, "uv": uv,
+                        "projection": cam.projection, "view": cam.view, "frame": report.frame}
+    report.status = "ok"
+
+
+def _upsample(frame: FrameState, uv, weight):
+    """A reduced frame's layers at the frame's size: (uv, weight, position,
+    normal, specular). The compositor reads the uv and the weight at the
+    frame's size; the G-buffer only for a debug view or the layers EXR (else it
+    stays reduced: fewer frame-size images when memory is short)."""
+    cam, values = frame.camera, frame.values
+    position, normal, specular = frame.position, frame.normal, frame.specular
+    lod = weight[..., 3]
+    lod[lod > 0] += np.float32(np.log2(frame.factor))  # the footprint in frame pixels is `factor` times larger
+    refl = texels.reflective_mask(position, specular)
+    stretched = [uv, weight]
+    if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
+        stretched += [position, normal, specular]
+    stretched = [reduced.upsample_nearest(a, cam.width, cam.height) for a in stretched]
+    uv, weight = stretched[:2]
+    if len(stretched) == 5:
+        position, normal, specular = stretched[2:]
+    frame.report.reflective_pixels = int(np.count_nonzero(reduced.upsample_nearest(refl, cam.width, cam.height)))
+    return uv, weight, position, normal, specular
+
+
+def _fill_images(frame: FrameState, uv, weight, position, normal, specular) -> None:
+    """The compositor's images: the uv and weight of the region that can change,
+    and the debug view's or the layers EXR's G-buffer images."""
+    cam, view = frame.camera, frame.values["debug_view"]
+    # The group composites only the region that can change; a debug
+    # view or the layers EXR shows the uv and vis of the whole frame,
+    # and so does a compositor that cannot place a region (host/nodes).
+    if view != "NONE" or frame.values["write_layers_exr"] or not host_nodes.compositor_places_regions():
+        region = (0, 0, cam.width, cam.height)
+    else:
+        region = compositing.image_region(uv[..., 2], weight[..., 3])
+    images = compositing.region_images(uv, weight, region)
+    frame.report.region = region
+    if view in compositing.GBUFFER_DEBUG_VIEWS:
+        images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
+    if frame.values["write_layers_exr"]:
+        images[compositing.IMAGE_POSITION] = position
+        n4 = np.array(normal, dtype=np.float32, copy=True)
+        n4[..., 3] = 1.0
+        images[compositing.IMAGE_NORMAL] = n4
+        images[compositing.IMAGE_SPECULAR] = specular
+    compositor.fill_images(images)

@@ -203,6 +203,7 @@ class MaterialTable:
 
     def __init__(self):
         self.rows: List[Tuple[float, float, float, float]] = [materials.NO_SPECULAR.row()]
+        self.reflective_rows: List[bool] = [materials.NO_SPECULAR.reflective]
         self.normal_map_of_row: List[int] = [-1]
         self.normal_maps: List[NormalMapRef] = []
         self._index: Dict[int, int] = {}
@@ -216,20 +217,21 @@ class MaterialTable:
             return self._index[key]
         spec, nmap = material_info(mat)
         map_index = -1
-        if nmap is not None and spec.amount > 0:
+        if nmap is not None and spec.reflective:
             ikey = nmap.image.as_pointer()
             if ikey not in self._map_index:
                 self._map_index[ikey] = len(self.normal_maps)
                 self.normal_maps.append(nmap)
             map_index = self._map_index[ikey]
         self.rows.append(spec.row())
+        self.reflective_rows.append(spec.reflective)
         self.normal_map_of_row.append(map_index)
         self._index[key] = len(self.rows) - 1
         return self._index[key]
 
     def reflective(self, index: int) -> bool:
-        r = self.rows[index]
-        return (r[0] + r[1] + r[2]) > 0.0
+        """Whether the core traces the pixels of row ``index`` (SpecularSpec.reflective)."""
+        return self.reflective_rows[index]
 
     def array(self) -> np.ndarray:
         return np.asarray(self.rows, dtype=np.float32).reshape(-1, 4)

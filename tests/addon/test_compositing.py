@@ -9,6 +9,7 @@ import pytest
 from glint_addon_helpers import load_logic
 
 cg = load_logic("compositing")
+texels = load_logic("texels")
 
 # The abstract kinds' inputs and outputs as the description numbers them
 # (host/nodes.py maps them onto each Blender's sockets).
@@ -110,9 +111,9 @@ def scene(h=12, w=16, seed=3):
     uv[..., :2] = rng.uniform(0, 1, (h, w, 2))
     uv[..., 2] = rng.uniform(0, 1, (h, w)) * (rng.uniform(size=(h, w)) > 0.3)
     uv[..., 3] = uv[..., 2]
-    seen = position[..., 3] > 0.5
+    seen = position[..., 3] > 0  # positions here are finite: seen is w > 0
     spec[~seen] = 0  # as the rasterizer leaves pixels no triangle covers
-    mask = cg.reflective_mask(position, spec)
+    mask = texels.reflective_mask(position, spec)
     uv[~mask] = 0  # the trace reports nothing where it does not march
     weight = np.zeros((h, w, 4), np.float32)
     weight[mask, :3] = rng.uniform(0.02, 0.9, (int(mask.sum()), 3))
@@ -287,14 +288,6 @@ def test_group_matches_glint_core_for_a_mirror(core):
     ok = (base[..., :3] - S[..., :3] * color[..., 3:4] >= 0).all(axis=-1)
     assert ok.sum() > 50
     assert np.allclose(out["Image"][ok, :3], want[ok, :3], atol=1e-5)
-
-
-def test_reflective_mask():
-    position = np.zeros((1, 4, 4), np.float32)
-    position[0, :, 3] = (1, 1, 0, 1)
-    position[0, 3, 0] = np.nan
-    spec = np.array([[[0.3, 0.6, 0.9, 0.25], [0, 0, 0, 1], [1, 1, 1, 1], [1, 1, 1, 1]]], np.float32)
-    assert np.array_equal(cg.reflective_mask(position, spec)[0], (True, False, False, False))
 
 
 def test_debug_images():

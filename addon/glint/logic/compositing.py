@@ -82,6 +82,8 @@ from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
+from . import texels
+
 # Image data-blocks the group reads (filled by the add-on before compositing).
 IMAGE_UV = "Glint UV"
 IMAGE_WEIGHT = "Glint Weight"
@@ -377,35 +379,6 @@ def use_second_bounce(mode: str, reflective_objects: int) -> bool:
 # Images handed to the compositor
 
 
-# These run on every pixel of every frame (2 M at 1920x1080): one pass per
-# channel over strided views, no reductions along the last axis, no temporaries
-# of the whole [h, w, 4] array that are not handed on.
-
-
-def specular_amount(specular: np.ndarray) -> np.ndarray:
-    """The core's specular amount: mean of rgb; non-finite counts as zero."""
-    s = np.asarray(specular, dtype=np.float32)
-    amount = s[..., 0] + s[..., 1]
-    amount += s[..., 2]
-    amount /= np.float32(3.0)
-    amount[~np.isfinite(amount)] = 0.0
-    return amount
-
-
-def reflective_mask(position: np.ndarray, specular: np.ndarray) -> np.ndarray:
-    """Pixels the core would trace: seen (w = 1, finite) with a positive specular amount."""
-    p = np.asarray(position, dtype=np.float32)
-    # A sum of the four channels is finite exactly when each is (NaN and inf
-    # propagate), short of an overflow past 3e38, which no position reaches.
-    total = p[..., 0] + p[..., 1]
-    total += p[..., 2]
-    total += p[..., 3]
-    seen = p[..., 3] > 0.5
-    seen &= np.isfinite(total)
-    seen &= specular_amount(specular) > 0
-    return seen
-
-
 # Pixels kept around the region's hits: Map UV estimates each pixel's uv
 # derivatives from its neighbours' uv (bilinear reads one pixel away), and a hit
 # at the region's edge must see the same neighbours as in the whole frame. With
@@ -469,7 +442,7 @@ def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
     """The RGBA picture of a G-buffer layer for the debug view (alpha 1)."""
     h, w = np.asarray(position).shape[:2]
     out = np.zeros((h, w, 4), np.float32)
-    seen = np.asarray(position)[..., 3] > 0.5
+    seen = texels.texel_seen(position)
     if view == "POSITION":
         out[..., :3] = np.asarray(position)[..., :3]
     elif view == "NORMAL":
@@ -591,49 +564,48 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
 
     def out(node, index):
         key = (node, index)
-        if key in cache:
-            return cache[key]
-        if node == GROUP_IN:
-            value = group_in[index]
-        else:
-            kind, props, _ = GROUP_NODES[node]
-            if kind == "switch":  # resolved before anything runs: the other side is never read
-                value = inp(node, 1 if switches[node] else 0)
-                cache[key] = value
-                return value
-            n_in = {"math": 3, "mix": 3, "combine": 4}.get(kind)
-            hw = _canvas([inp(node, i) for i in range(n_in)], frame_hw) if n_in else None
-            if kind == "image":
-                value = np.asarray(images[props["image"]], dtype=np.float32)
-                if index == 1:
-                    value = value[..., 3]
-            elif kind == "translate":
-                dx, dy = (float(np.asarray(inp(node, i), np.float32).flat[0]) for i in (1, 2))
-                value = _translated(inp(node, 0), dx, dy, frame_hw)
-            elif kind == "combine":
-                value = np.stack([np.broadcast_to(np.asarray(inp(node, i), np.float32), hw)
-                                  for i in range(4)], axis=-1)
-            elif kind == "map_uv":
-                value = map_uv(inp(node, 0), inp(node, 1))
-            elif kind == "blur":
-                value = blur(inp(node, 0), props["sigma"])
-            elif kind == "separate":
-                src = inp(node, 0)
-                value = _as_colour(src, tuple(_canvas([src], frame_hw)) + (4,))[..., index]
-            elif kind == "math":
-                a, b, c = (np.asarray(inp(node, i) if inp(node, i) is not None else 0.0, np.float32)
-                           for i in range(3))
-                value = _MATH[props["operation"]](a, b, c)
-                if props["clamp"]:
-                    value = np.clip(value, 0.0, 1.0)
-                value = np.broadcast_to(value, hw).astype(np.float32)
-            elif kind == "mix":
-                fac = np.asarray(inp(node, 0), np.float32)
-                shape = tuple(hw) + (4,)
-                value = _blend(props, fac, _as_colour(inp(node, 1), shape), _as_colour(inp(node, 2), shape))
+        if key not in cache:
+            if node == GROUP_IN:
+                cache[key] = group_in[index]
+            elif GROUP_NODES[node][0] == "switch":  # resolved before anything runs: the other side is never read
+                cache[key] = inp(node, 1 if switches[node] else 0)
             else:
-                raise ValueError(kind)
-        cache[key] = value
-        return value
+                cache[key] = _node_output(node, index, lambda i: inp(node, i), frame_hw, images, map_uv, blur)
+        return cache[key]
 
     return {name: inp(GROUP_OUT, i) for i, (name, _) in enumerate(GROUP_OUTPUTS)}
+
+
+def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, images: Dict[str, np.ndarray],
+                 map_uv, blur) -> np.ndarray:
+    """Output ``index`` of one of :data:`GROUP_NODES` (not a switch), given its
+    inputs by number (``inp``), on the canvas Blender would give it."""
+    kind, props, _ = GROUP_NODES[node]
+    n_in = {"math": 3, "mix": 3, "combine": 4}.get(kind)
+    hw = _canvas([inp(i) for i in range(n_in)], frame_hw) if n_in else None
+    if kind == "image":
+        value = np.asarray(images[props["image"]], dtype=np.float32)
+        return value[..., 3] if index == 1 else value
+    if kind == "translate":
+        dx, dy = (float(np.asarray(inp(i), np.float32).flat[0]) for i in (1, 2))
+        return _translated(inp(0), dx, dy, frame_hw)
+    if kind == "combine":
+        return np.stack([np.broadcast_to(np.asarray(inp(i), np.float32), hw) for i in range(4)], axis=-1)
+    if kind == "map_uv":
+        return map_uv(inp(0), inp(1))
+    if kind == "blur":
+        return blur(inp(0), props["sigma"])
+    if kind == "separate":
+        src = inp(0)
+        return _as_colour(src, tuple(_canvas([src], frame_hw)) + (4,))[..., index]
+    if kind == "math":
+        a, b, c = (np.asarray(inp(i) if inp(i) is not None else 0.0, np.float32) for i in range(3))
+        value = _MATH[props["operation"]](a, b, c)
+        if props["clamp"]:
+            value = np.clip(value, 0.0, 1.0)
+        return np.broadcast_to(value, hw).astype(np.float32)
+    if kind == "mix":
+        fac = np.asarray(inp(0), np.float32)
+        shape = tuple(hw) + (4,)
+        return _blend(props, fac, _as_colour(inp(1), shape), _as_colour(inp(2), shape))
+    raise ValueError(kind)

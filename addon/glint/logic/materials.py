@@ -35,7 +35,7 @@ import math
 from dataclasses import dataclass
 from typing import Mapping, Optional, Sequence, Tuple
 
-from . import schema
+from . import schema, texels
 
 # The book: "511 is exported as 127.75", i.e. shininess = hardness / 4. The
 # numbers are the core's (schema.py), so that this mapping and the core's
@@ -62,8 +62,16 @@ class SpecularSpec:
 
     @property
     def amount(self) -> float:
-        """How strongly the surface reflects: the core's mean of the colour."""
-        return specular_amount(self.color)
+        """How strongly the lobe reflects, the mean of its colour in double
+        precision: the weight of each lobe where two shaders mix
+        (:func:`_combine`). Whether the core traces it is :attr:`reflective`."""
+        return (self.color[0] + self.color[1] + self.color[2]) / 3.0
+
+    @property
+    def reflective(self) -> bool:
+        """Whether the core traces this material's pixels (texels.is_reflective,
+        on the colour as the G-buffer holds it)."""
+        return bool(texels.is_reflective(self.color))
 
     @property
     def alpha(self) -> float:
@@ -75,19 +83,6 @@ class SpecularSpec:
 
 
 NO_SPECULAR = SpecularSpec((0.0, 0.0, 0.0), 0.0)
-
-
-def specular_amount(rgb: Sequence[float]) -> float:
-    """The seed's specular amount of a specular colour (r, g, b[, a]): the mean of
-    the rgb (glint::specular_amount)."""
-    return (rgb[0] + rgb[1] + rgb[2]) / 3.0
-
-
-def is_reflective(rgb: Sequence[float]) -> bool:
-    """Whether a specular colour reflects at all: a positive, finite amount
-    (glint::is_reflective; the core skips every other pixel)."""
-    amount = specular_amount(rgb)
-    return math.isfinite(amount) and amount > 0.0
 
 
 def _clamp(v: float, lo: float, hi: float) -> float:
