@@ -206,28 +206,30 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:
-    """How many of the scene's objects have a reflective material, and whether
-    one of those materials is rough enough for the blur (its shininess below a
-    mirror's). Read from the materials, not the frame, because the render takes
-    the node tree's values before the frame is exported (module docstring of
+    """How many of the scene's objects count for Auto's second bounce (a sharp
+    or metallic reflective material: ``logic.compositing.counts_for_second_bounce``),
+    and whether a reflective material is rough enough for the blur (its shininess
+    below a mirror's). Read from the materials, not the frame, because the render
+    takes the node tree's values before the frame is exported (module docstring of
     handlers); objects hidden from the render are not counted."""
-    reflective_of = {}  # material name -> (reflective, rough)
+    of_material = {}  # material name -> (counts for the bounce, rough)
     count, rough = 0, False
     for ob in scene.objects:
         if ob.hide_render:
             continue
-        reflects = False
+        counts = False
         for slot in getattr(ob, "material_slots", ()):
             mat = slot.material
             if mat is None:
                 continue
-            if mat.name not in reflective_of:
+            if mat.name not in of_material:
                 spec, _ = gather.material_info(mat)
-                reflective_of[mat.name] = (spec.reflective, spec.reflective and spec.alpha < 1.0)
-            r, g = reflective_of[mat.name]
-            reflects = reflects or r
+                of_material[mat.name] = (cg.counts_for_second_bounce(spec.reflective, spec.alpha, spec.amount),
+                                         spec.reflective and spec.alpha < 1.0)
+            c, g = of_material[mat.name]
+            counts = counts or c
             rough = rough or g
-        count += reflects
+        count += counts
     return count, rough
 
 

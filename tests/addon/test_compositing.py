@@ -178,6 +178,21 @@ def test_second_bounce_samples_the_frame_with_its_first(engine_passes):
     assert np.array_equal(out["Image"][..., 3], base[..., 3])
 
 
+def test_only_sharp_or_metallic_reflectors_count_for_autos_second_bounce():
+    mats = load_logic("materials")
+
+    def counts(**inputs):  # a Principled BSDF with Blender 3.x's input names
+        spec = mats.principled_specular(dict({"Specular": 0.5, "Roughness": 0.5, "Metallic": 0.0}, **inputs))
+        return cg.counts_for_second_bounce(spec.reflective, spec.alpha, spec.amount)
+    # Blender's default material: F0 = 0.08 x 0.5 = 0.04, Roughness 0.5 (hardness ~33 < 511)
+    assert not counts()
+    assert counts(Roughness=0.1)  # below ~0.25 the shininess is a mirror's
+    assert counts(Metallic=1.0, **{"Base Color": (0.9, 0.9, 0.9, 1.0)})  # amount 0.9
+    assert not counts(Specular=0.0, Roughness=0.1)  # not reflective at all
+    assert not cg.counts_for_second_bounce(True, 0.5, 0.49)
+    assert cg.counts_for_second_bounce(True, 0.5, 0.5)
+
+
 def test_second_bounce_runs_where_reflectors_can_meet():
     assert not cg.use_second_bounce("AUTO", 0)
     assert not cg.use_second_bounce("AUTO", 1)

@@ -124,7 +124,10 @@ g = bpy.data.node_groups[cg.GROUP_NAME]
 res['passes'] = [s.view_layers[0].use_pass_glossy_direct, s.view_layers[0].use_pass_glossy_color]
 res['switch'] = [hn.switch_is_on(g.nodes['show_reflection']), hn.switch_is_on(g.nodes['show_debug'])]
 res['names']['rgb'] = t.nodes[cg.WORLD_COLOUR_NODE].outputs[0].name
-# The second bounce: Auto runs it from two reflective objects on (the factory cube is one)
+# The second bounce: Auto runs it from two sharp reflectors on (the factory cube,
+# made one here: its default material's Roughness 0.5 does not count)
+cube_mat = s.objects['Cube'].material_slots[0].material
+cube_mat.node_tree.nodes['Principled BSDF'].inputs['Roughness'].default_value = 0.1
 from glint import compositor as glint_compositor
 bounce = [hn.switch_is_on(g.nodes['use_bounce'])]
 plane = bpy.data.objects.new('Second Reflector', bpy.data.meshes.new('Second Reflector'))
