@@ -18,15 +18,18 @@ bl_info = {
 }
 
 # Reload support (F3 > Reload Scripts): submodules first, in dependency order,
-# as BlendLuxCore does.
+# as BlendLuxCore does. Every module of the package is listed
+# (tests/addon/test_reload_order.py).
+RELOAD_ORDER = (
+    "logic", "logic.schema", "logic.texels", "logic.materials", "logic.projection", "logic.frustum", "logic.settings",
+    "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement",
+    "logic.compositing", "host", "host.engines", "host.nodes", "host.data", "native", "state",
+    "gather", "compositor", "exact_cache", "frame", "measure", "properties", "preferences", "operators",
+    "ui", "handlers")
 if "bpy" in locals():
     import importlib
 
-    for _name in ("logic.materials", "logic.projection", "logic.frustum", "logic.settings",
-                  "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement",
-                  "logic.compositing", "host", "host.engines", "host.nodes", "host.data", "native", "state",
-                  "gather", "compositor", "frame", "measure", "properties", "preferences", "operators",
-                  "ui", "handlers"):
+    for _name in RELOAD_ORDER:
         importlib.reload(importlib.import_module(f"{__name__}.{_name}"))
 
 import bpy  # noqa: E402,F401  (its presence in locals() marks a reload)

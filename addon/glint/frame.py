@@ -19,7 +19,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from . import compositor, gather, native
+from . import compositor, exact_cache, gather, native
 from .host import nodes as host_nodes
 from .logic import compositing, geometry, reduced, settings as settings_logic, texels
 from .logic.progress import Cancelled, Progress, Timings
@@ -52,11 +52,19 @@ def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = Fa
                           backend=backend, **kwargs)
 
 
-def mesh_kwargs(core, exp: gather.SceneExport, march: str) -> dict:
-    """``{"mesh": ...}`` for a march that traces the scene's triangles, else ``{}``."""
-    if core.march_details()[march]["needs_mesh"]:
+def mesh_kwargs(core, exp: gather.SceneExport, march: str, note=None) -> dict:
+    """``{"mesh": ...}`` for a march that traces the scene's triangles, else ``{}``.
+    The BVH is kept between frames where the core can (``exact_cache``); ``note``
+    receives what happened to it, for the frame's log line."""
+    if not core.march_details()[march]["needs_mesh"]:
+        exact_cache.release()
+        return {}
+    if not hasattr(core, "ExactScene"):  # a core from before the kept BVH
         return {"mesh": geometry.trace_mesh(exp.triangles)}
-    return {}
+    mesh, update = exact_cache.seen_from_camera(core, exp.triangles, np.linalg.inv(exp.camera.view))
+    if note is not None:
+        note(f"exact march's BVH {update['bvh']} in {update['ms']:.0f} ms")
+    return {"mesh": mesh}
 
 
 def resolve_backend(core, requested: str) -> str:
@@ -227,7 +235,7 @@ def _rasterize_and_trace(frame: FrameState, size) -> bool:
     report.backend = used
     if frame.back_layer:
         kw["back_position"] = gbuf["back_position"]
-    kw.update(mesh_kwargs(core, exp, kw["march"]))
+    kw.update(mesh_kwargs(core, exp, kw["march"], frame.note))
     if used == "gl" and not core.march_details()[kw["march"]]["gl"]:
         log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
     proj32 = exp.camera.projection.astype(np.float32)

@@ -130,3 +130,12 @@ def trace_mesh(triangles: Triangles):
     own triangles (the exact march): the export's corners, unshared."""
     vertices = np.ascontiguousarray(triangles.positions.reshape(-1, 3), dtype=np.float32)
     return vertices, np.arange(vertices.shape[0], dtype=np.int32).reshape(-1, 3)
+
+
+def world_vertices(triangles: Triangles, view_to_world) -> np.ndarray:
+    """The export's corners (view space) carried into world space, float32 [3T, 3]:
+    the frame the exact march's BVH is kept in between frames, where a camera
+    move changes nothing (glint_core.ExactScene)."""
+    m = np.asarray(view_to_world, dtype=np.float64)
+    co = triangles.positions.reshape(-1, 3).astype(np.float64)
+    return np.ascontiguousarray(co @ m[:3, :3].T + m[:3, 3], dtype=np.float32)
