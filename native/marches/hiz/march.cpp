@@ -1,10 +1,9 @@
-// The "hiz" march's row of the table of marches. Its code is not in this
-// folder yet: the CPU walk is native/src/cpu/march_hiz.cpp and hiz_planes.cpp,
-// its GL passes shaders/hiz_*.glsl, hiz_*.frag, trace_hiz*.{frag,comp} and
-// GlState::build_pyramid / trace_reusing (native/src/gl/passes.cpp). They
-// move here once the work on the walk's speed has merged.
-#include "cpu/trace.h"
+// The "hiz" march's row of the table of marches. Its CPU code is beside
+// this file: march_hiz.cpp (the trace), hiz_planes.cpp, hiz_walk*.cpp; its GL
+// passes are still shaders/hiz_*.glsl, hiz_*.frag, trace_hiz*.{frag,comp} and
+// GlState::build_pyramid / trace_reusing (native/src/gl/passes.cpp).
 #include "glint/marches.h"
+#include "hiz.h"
 
 namespace glint {
 

@@ -7,7 +7,6 @@
 
 namespace glint::cpu {
 
-Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);
 Image trace_exact(const TraceInputs& in, const TraceOptions& opt, int threads);
 
 }  // namespace glint::cpu

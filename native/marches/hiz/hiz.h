@@ -81,8 +81,11 @@ void hiz_plane_normals_row(const Image& position, const Image& normal, const See
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes);
 
-// trace_hiz() (trace.h) with the given walk, which must be available: the
-// tests hold the walks to the same answers.
+// The whole frame on the CPU, with the walk hiz_walk_default() picks: the
+// `cpu` entry of the march's row (march.cpp).
+Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);
+// The same with the given walk, which must be available: the tests hold the
+// walks to the same answers.
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, WalkIsa isa);
 
 }  // namespace glint::cpu
