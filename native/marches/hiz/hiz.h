@@ -1,5 +1,5 @@
 // The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's). The GL
-// backend runs the same steps in shaders/hiz_base.frag, hiz_reduce.frag and
+// backend runs the same steps in hiz_base.frag, hiz_reduce.frag and
 // trace_hiz.frag; docs/marches.md explains the method.
 #pragma once
 #include <cstddef>

@@ -1,7 +1,8 @@
 // The "hiz" march's row of the table of marches. Its CPU code is beside
-// this file: march_hiz.cpp (the trace), hiz_planes.cpp, hiz_walk*.cpp; its GL
-// passes are still shaders/hiz_*.glsl, hiz_*.frag, trace_hiz*.{frag,comp} and
-// GlState::build_pyramid / trace_reusing (native/src/gl/passes.cpp).
+// this file: march_hiz.cpp (the trace), hiz_planes.cpp, hiz_walk*.cpp; so are
+// its shaders (hiz_*.glsl, hiz_*.{frag,comp}, trace_hiz*.{frag,comp}). The
+// passes that run them are still GlState::build_pyramid / trace_reusing
+// (native/src/gl/passes.cpp).
 #include "glint/marches.h"
 #include "hiz.h"
 
