@@ -1,6 +1,7 @@
-// The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's). The GL
-// backend runs the same steps in hiz_base.frag, hiz_reduce.frag and
-// trace_hiz.frag; docs/marches.md explains the method.
+// The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's), and its
+// entry points on both backends. The GL backend runs the same steps in
+// hiz_base.frag, hiz_reduce.frag and trace_hiz.frag (gl_passes.cpp);
+// docs/marches.md explains the method.
 #pragma once
 #include <cstddef>
 #include <vector>
@@ -8,8 +9,29 @@
 #include "glint/image.h"
 #include "glint/options.h"
 #include "glint/projection.h"
+#include "glint/schema.h"
 #include "glint/stages.h"
 #include "hiz_walk.h"
+
+namespace glint {
+
+// The hiz march at resolution <= kHizReuseResolution traces every other pixel
+// of every other row first, and each other pixel only where those traced
+// around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
+// backends decide by this.
+constexpr float kHizReuseResolution = hiz::kReuseResolution;
+inline bool hiz_reuses_rays(const TraceOptions& o) {
+  return o.march == March::Hiz && o.resolution <= kHizReuseResolution;
+}
+
+namespace gl {
+class GlState;
+// The march on the GL backend (gl_passes.cpp): the pyramid, then the trace,
+// reusing rays as the CPU does. The row's gl_trace.
+Image trace_hiz(GlState& gl, const TraceInputs& in, const TraceOptions& opt);
+}  // namespace gl
+
+}  // namespace glint
 
 namespace glint::cpu {
 
