@@ -1,5 +1,5 @@
-// One function per march: a whole frame on the CPU. These are the `cpu`
-// entries of the table of marches (glint/marches.h); nothing else calls them.
+// The exact march's whole frame on the CPU (march_exact.cpp, with Embree):
+// the `cpu` entry of its row (march.cpp); nothing else calls it.
 #pragma once
 #include "glint/image.h"
 #include "glint/options.h"
