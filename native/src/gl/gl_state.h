@@ -80,6 +80,8 @@ class GlState {
   void compile_source_for_test(const std::string& entry, const std::string& source, FileNameFn file_name);
 
   // --- for a march's own passes (MarchInfo::gl_trace) ------------------------
+  // The helpers every pass above uses, public so that a march's passes, in
+  // its folder, are written with them too.
   // Textures are kept between calls and reallocated only when the size
   // changes, so a sequence of frames allocates once. Every pass uses the
   // same few slots, so a large frame's memory is given back as soon as a
