@@ -97,7 +97,7 @@ function(_glint_expand name depth out)
   endif()
   if(NOT DEFINED _ID_${name})
     message(FATAL_ERROR "EmbedShaders: \"${name}\" is included but not listed among the shader "
-                        "files in native/CMakeLists.txt")
+                        "files in native/CMakeLists.txt or a march folder's glint_march_shaders()")
   endif()
   set(path "${GLINT_SHADER_DIR}/${name}")
   if(DEFINED _PATH_${name})

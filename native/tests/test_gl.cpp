@@ -217,9 +217,11 @@ TEST(GlShaders, CompileErrorInAnIncludedFileNamesThatFile) {
 
 TEST(GlShaders, EveryPassCompilesAndLinks) {
   GLINT_REQUIRE_GL(gl);
-  for (const char* f : {"trace_seed.frag", "trace_linear.frag", "reflection_color.frag",
-                        "box_blur.frag", "reflection.frag", "combine.frag"})
+  for (const char* f : {"reflection_color.frag", "box_blur.frag", "reflection.frag", "combine.frag"})
     EXPECT_NO_THROW(gl::compile_for_test(*gl, f)) << f;
+  // Every march's GL program, from the table: a new march's is compiled too.
+  for (const MarchInfo& m : march_table())
+    if (m.gl_program) EXPECT_NO_THROW(gl::compile_for_test(*gl, m.gl_program)) << m.gl_program;
 }
 
 // --- stages against the CPU reference ---------------------------------------------

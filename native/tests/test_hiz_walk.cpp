@@ -1,4 +1,4 @@
-// The hiz march's walks (native/src/cpu/hiz_walk.h) give the same answers bit
+// The hiz march's walks (native/marches/hiz/hiz_walk.h) give the same answers bit
 // for bit: the AVX2 walk, eight rays at once, against the scalar one, on the
 // analytic scene with every option that changes which path a ray takes.
 #include <gtest/gtest.h>
@@ -6,9 +6,9 @@
 #include <cstring>
 
 #include "analytic_scene.h"
-#include "cpu/hiz.h"
 #include "glint/marches.h"
 #include "glint/stages.h"
+#include "hiz/hiz.h"
 
 using namespace glint;
 

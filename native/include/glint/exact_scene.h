@@ -59,7 +59,7 @@ class ExactScene {
   size_t vertex_count() const;
   size_t triangle_count() const;
 
-  // The march's side of the scene (native/src/cpu/march_exact.cpp).
+  // The march's side of the scene (native/marches/exact/march_exact.cpp).
   class Impl;
   const Impl& impl() const { return *impl_; }
 

@@ -14,6 +14,9 @@
 namespace glint {
 
 struct TraceInputs;
+namespace gl {
+class GlState;  // the GL backend's state (native/src/gl/gl_state.h)
+}
 
 // One trace option as a march uses it: which keyword, and what it means there.
 struct MarchKnob {
@@ -23,6 +26,8 @@ struct MarchKnob {
 
 // A whole frame of one march on the CPU: the reference every backend is held to.
 using CpuTraceFn = Image (*)(const TraceInputs& in, const TraceOptions& opt, int threads);
+// A whole frame of one march on the GL backend, through its own passes.
+using GlTraceFn = Image (*)(gl::GlState& gl, const TraceInputs& in, const TraceOptions& opt);
 
 struct MarchInfo {
   // Its position in the registration list (the built-in ones have an
@@ -41,6 +46,12 @@ struct MarchInfo {
   // The GL backend's fragment program (embedded by name), or nullptr when
   // the march has no GPU form: backend="gl" then runs `cpu` and says so.
   const char* gl_program = nullptr;
+  // Where the GPU form is more than gl_program drawn once over the frame
+  // (the hiz march builds its pyramid first, and may trace a quarter of the
+  // pixels and list the rest): the passes that run instead of that draw,
+  // defined in the march's folder and built with the GL backend only (set
+  // the field under #ifdef GLINT_HAVE_GL). nullptr: the one draw.
+  GlTraceFn gl_trace = nullptr;
 };
 
 // Every march, in the order help texts list them: the registration order.
@@ -53,14 +64,6 @@ const MarchInfo& march_info(March m);
 const MarchInfo& march_info(const std::string& name);
 inline March parse_march(const std::string& name) { return march_info(name).id; }
 inline const char* to_string(March m) { return march_info(m).name; }
-// The hiz march at resolution <= kHizReuseResolution traces every other pixel
-// of every other row first, and each other pixel only where those traced
-// around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
-// backends decide by this.
-constexpr float kHizReuseResolution = hiz::kReuseResolution;
-inline bool hiz_reuses_rays(const TraceOptions& o) {
-  return o.march == March::Hiz && o.resolution <= kHizReuseResolution;
-}
 
 // "seed", "linear", ... joined with `sep`, for messages and help texts.
 std::string march_names(const char* sep = ", ");

@@ -1,7 +1,7 @@
 // The "exact" march's row of the table of marches. Its code is
-// native/src/cpu/march_exact.cpp (Embree), to move here once the work on it
-// has merged; it has no GL form.
-#include "cpu/trace.h"
+// march_exact.cpp beside it (Embree, and the ExactScene of
+// glint/exact_scene.h); it has no GL form.
+#include "exact.h"
 #include "glint/marches.h"
 
 namespace glint {

@@ -1,10 +1,9 @@
-// The "hiz" march's row of the table of marches. Its code is not in this
-// folder yet: the CPU walk is native/src/cpu/march_hiz.cpp and hiz_planes.cpp,
-// its GL passes shaders/hiz_*.glsl, hiz_*.frag, trace_hiz*.{frag,comp} and
-// GlState::build_pyramid / trace_reusing (native/src/gl/passes.cpp). They
-// move here once the work on the walk's speed has merged.
-#include "cpu/trace.h"
+// The "hiz" march's row of the table of marches. Its code is beside this
+// file: on the CPU march_hiz.cpp (the trace), hiz_planes.cpp and
+// hiz_walk*.cpp; on GL gl_passes.cpp, which runs the shaders hiz_*.glsl,
+// hiz_*.{frag,comp} and trace_hiz*.{frag,comp}.
 #include "glint/marches.h"
+#include "hiz.h"
 
 namespace glint {
 
@@ -32,6 +31,9 @@ MarchInfo glint_march_hiz() {
   m.uses_back_position = true;
   m.cpu = &cpu::trace_hiz;
   m.gl_program = "trace_hiz.frag";
+#ifdef GLINT_HAVE_GL
+  m.gl_trace = &gl::trace_hiz;  // the pyramid first, and the reuse of rays
+#endif
   return m;
 }
 

@@ -1,17 +1,24 @@
 // GlState: the GL backend's state on its worker thread, the context and
 // every GL object, and the operations on them. Its methods live by concern:
 // resources.cpp (textures, targets, uploads, read-backs, programs), passes.cpp
-// (the full-screen stages, the Hi-Z pyramid), gl_rasterizer.cpp (the G-buffer
-// and back-face passes). Only worker.cpp's thread ever calls them.
+// (the full-screen stages), look_passes.cpp (the look's), gl_rasterizer.cpp
+// (the G-buffer and back-face passes). A march whose GL form is more than one
+// program drawn over the frame has its passes in its own folder
+// (MarchInfo::gl_trace; native/marches/hiz/gl_passes.cpp), which use the
+// section "for a march's own passes" below. Only worker.cpp's thread ever
+// calls any of them.
 #pragma once
+#include <cstddef>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "gl/egl_context.h"
 #include "gl/program.h"
 #include "glint/image.h"
+#include "glint/marches.h"
 #include "glint/options.h"
 #include "glint/raster.h"
 #include "glint/stages.h"
@@ -43,39 +50,9 @@ class GlState {
   const ContextInfo& info() const { return ctx_.info(); }
   const Api& api() const { return gl_; }
 
+  // A trace: the march's own passes where its row has them (gl_trace), else
+  // its gl_program drawn once over the frame.
   Image trace(const TraceInputs& in, const TraceOptions& opt);
-
-  // The Hi-Z pyramid of march_hiz (native/src/cpu/march_hiz.cpp): level 0
-  // from the G-buffer, then each level from the one below, all on the GPU
-  // (reduce_levels()).
-  void build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
-                     const Texture& nrm, const Texture* back);
-
-  // Every uniform of the trace program `prog` (a march's, or
-  // trace_hiz_list.comp), on the texture units trace() binds.
-  void trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
-                      const Texture& nrm, const Texture* spec, const Texture* back);
-
-  // The hiz march reusing rays (hiz_reuses_rays()): `prog` (trace_hiz.frag)
-  // traces a quarter of the pixels, trace_hiz_fill.comp spreads them and
-  // lists the pixels where they disagree (hiz_rays.glsl), hiz_rays_args.comp
-  // sizes the dispatch and `list` (trace_hiz_list.comp) traces the listed
-  // pixels, a ray per lane. Both programs have every uniform set. One
-  // read-back, at the end.
-  Image trace_reusing(GLuint prog, GLuint list, const Texture& pos, const Texture& nrm, const Texture* spec,
-                      int w, int h, int textures);
-
-  // The uniforms hiz_common.glsl declares.
-  void bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back);
-
-  // `second`, when given, is written at location 1 (level 0, same size).
-  void attach_level(GLuint tex, int level, const Texture* second = nullptr);
-  // Levels 1..levels-1 of `tex`, each drawn by `reduce` from the level below
-  // (u_sizes = source w, h, this level's w, h), which it reads as image unit 0
-  // (`format`, u_src): no level is sampled while it is rendered, and on
-  // llvmpipe an imageLoad costs much less than a texelFetch (the hiz
-  // pyramid's reductions took about 45% less time).
-  void reduce_levels(GLuint tex, int levels, GLenum format, GLuint reduce, int w, int h);
 
   Image reflection_color(const Image& uv, const Image& color);
 
@@ -102,40 +79,78 @@ class GlState {
   // Compiles `source` (a test's own embedded shader) as the entry `entry`.
   void compile_source_for_test(const std::string& entry, const std::string& source, FileNameFn file_name);
 
- private:
+  // --- for a march's own passes (MarchInfo::gl_trace) ------------------------
+  // The helpers every pass above uses, public so that a march's passes, in
+  // its folder, are written with them too.
   // Textures are kept between calls and reallocated only when the size
   // changes, so a sequence of frames allocates once. Every pass uses the
   // same few slots, so a large frame's memory is given back as soon as a
   // smaller one runs.
-  // kPlanes: the hiz march's plane normals; kCoarse: its traced quarter of the
-  // pixels when it reuses rays (hiz_reuses_rays()).
-  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kPlanes, kCoarse, kSlots };
+  enum Slot { kIn0, kIn1, kIn2, kOut, kAux, kSlots };
 
-  void release(Texture& t);
+  // A trace's inputs as trace() uploads them: position, normal, the specular
+  // buffer where given, the back-face layer where given and the march reads
+  // it; `count` textures in all (for the size and memory messages).
+  struct TraceTextures {
+    const Texture* pos = nullptr;
+    const Texture* nrm = nullptr;
+    const Texture* spec = nullptr;
+    const Texture* back = nullptr;
+    int count = 0;
+  };
+  TraceTextures upload_trace_inputs(const TraceInputs& in, const MarchInfo& info);
 
-  // Drains the GL error queue; throws on the first error with `what`.
-  void check(const std::string& what);
+  // Every uniform of a trace program `prog` that trace_common.glsl declares,
+  // on the texture units upload_trace_inputs() and trace() use (0-2).
+  void trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOptions& opt, const TraceTextures& t);
 
-  // After every pass in debug builds; release builds skip the round trip.
-  void debug_check(const std::string& what);
+  // GL objects a march's passes keep between frames (the hiz march's
+  // pyramid and list of rays): one set per march, made on first use and
+  // released with the context.
+  struct MarchObjects {
+    virtual ~MarchObjects() = default;
+    virtual void release(const Api& gl) = 0;
+  };
+  template <class T>
+  T& march_objects(March m) {
+    std::unique_ptr<MarchObjects>& o = march_objects_[static_cast<int>(m)];
+    if (!o) o = std::make_unique<T>();
+    return static_cast<T&>(*o);
+  }
 
-  // The texture limits, before any allocation: an 8K frame on a GL whose
-  // limit is 4K fails here, with the numbers, instead of inside the driver.
-  void check_size(int w, int h, const char* pass, int textures);
-
-  [[noreturn]] void out_of_memory(int w, int h, const char* pass, int textures);
-
-  // A w x h RGBA32F texture in `slot`, allocated if its size changed.
-  // Allocation errors are checked in every build: running out of memory is
-  // an expected outcome for large frames, not a bug.
+  // A w x h RGBA32F texture in `slot` (or a march's own `t`), allocated if
+  // its size changed. Allocation errors are checked in every build: running
+  // out of memory is an expected outcome for large frames, not a bug.
   Texture& target(Slot slot, int w, int h, const char* pass, int textures);
+  Texture& target(Texture& t, int w, int h, const char* pass, int textures);
 
   Texture& upload(Slot slot, const Image& img, const char* pass, int textures);
 
-  // Binding a texture to work on it replaces what the active unit held, and
-  // the passes' inputs sit on units 0..3: uploads and allocations use a unit
-  // no pass samples from.
-  void scratch_unit() { gl_.ActiveTexture(GL_TEXTURE0 + 15); }
+  struct Pyramid {
+    GLuint id = 0;
+    int w = 0, h = 0, levels = 0;
+  };
+  // (Re)allocate `t` as a `format` texture of w x h with every mip level down
+  // to 1x1, unless it already is one: kept between frames. `stage` and
+  // `images` size the checks and the out-of-memory error; `name` the others.
+  void mip_target(Pyramid& t, int w, int h, GLenum format, const char* stage, int images, const char* name);
+
+  // `second`, when given, is written at location 1 (level 0, same size).
+  void attach_level(GLuint tex, int level, const Texture* second = nullptr);
+  // Levels 1..levels-1 of `tex`, each drawn by `reduce` from the level below
+  // (u_sizes = source w, h, this level's w, h), which it reads as image unit 0
+  // (`format`, u_src): no level is sampled while it is rendered, and on
+  // llvmpipe an imageLoad costs much less than a texelFetch (the hiz
+  // pyramid's reductions took about 45% less time).
+  void reduce_levels(GLuint tex, int levels, GLenum format, GLuint reduce, int w, int h);
+
+  // `bytes` of `data` (or uninitialised, for nullptr) into `buffer`, generated
+  // on first use and bound to `target`; GL_OUT_OF_MEMORY is an Error naming `what`.
+  void buffer_data(GLuint& buffer, GLenum target, size_t bytes, const void* data, const char* what,
+                   GLenum usage = GL_STREAM_DRAW);
+
+  // After every pass in debug builds; release builds skip the round trip.
+  void debug_check(const std::string& what);
 
   GLint loc(GLuint prog, const char* name) { return gl_.GetUniformLocation(prog, name); }
 
@@ -157,6 +172,23 @@ class GlState {
   Image read(int w, int h, GLenum attachment, const char* pass);
 
   Image draw_and_read(int w, int h, const char* pass, int textures);
+
+ private:
+  void release(Texture& t);
+
+  // Drains the GL error queue; throws on the first error with `what`.
+  void check(const std::string& what);
+
+  // The texture limits, before any allocation: an 8K frame on a GL whose
+  // limit is 4K fails here, with the numbers, instead of inside the driver.
+  void check_size(int w, int h, const char* pass, int textures);
+
+  [[noreturn]] void out_of_memory(int w, int h, const char* pass, int textures);
+
+  // Binding a texture to work on it replaces what the active unit held, and
+  // the passes' inputs sit on units 0..3: uploads and allocations use a unit
+  // no pass samples from.
+  void scratch_unit() { gl_.ActiveTexture(GL_TEXTURE0 + 15); }
 
   // --- rasterizer objects, kept between frames like the textures -----------
   // A framebuffer of `colors` RGBA32F targets and a DEPTH32F buffer: the
@@ -183,34 +215,16 @@ class GlState {
   void upload_normal_maps(const std::vector<Image>& maps);
   void draw_gbuffer(const RasterInputs& in, double base, double depth_scale, const float* proj);
   Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
-  // `bytes` of `data` (or uninitialised, for nullptr) into `buffer`, generated
-  // on first use and bound to `target`; GL_OUT_OF_MEMORY is an Error naming `what`.
-  void buffer_data(GLuint& buffer, GLenum target, size_t bytes, const void* data, const char* what,
-                   GLenum usage = GL_STREAM_DRAW);
 
   EglContext ctx_;
   const Api& gl_;
   GLuint empty_vao_ = 0;
   GLuint fbo_ = 0;
   Texture textures_[kSlots];
-  struct Pyramid {
-    GLuint id = 0;
-    int w = 0, h = 0, levels = 0;
-  };
-  Pyramid pyramid_;     // RG32F: the hiz march's min/max depth, every level down to 1x1
   Pyramid cone_chain_;  // RGBA32F, every level down to 1x1
-  // (Re)allocate `t` as a `format` texture of w x h with every mip level down
-  // to 1x1, unless it already is one: kept between frames. `stage` and
-  // `images` size the checks and the out-of-memory error; `name` the others.
-  void mip_target(Pyramid& t, int w, int h, GLenum format, const char* stage, int images, const char* name);
   Texture env_brdf_;
-  // hiz_rays.glsl's list for a w x h frame, with room for every pixel,
-  // bound as GL_SHADER_STORAGE_BUFFER with its header reset; kept between
-  // frames, grown when a larger one needs it.
-  GLuint hiz_ray_list(int w, int h);
-  GLuint hiz_rays_ = 0;
-  size_t hiz_rays_bytes_ = 0;
   std::map<std::string, GLuint> programs_;
+  std::map<int, std::unique_ptr<MarchObjects>> march_objects_;  // by March
 };
 
 }  // namespace glint::gl

@@ -1,5 +1,6 @@
-// GlState: the full-screen passes of the pipeline, one fragment program each,
-// and the Hi-Z pyramid the "hiz" march walks. See gl_state.h.
+// GlState: the full-screen passes of the pipeline, one fragment program each:
+// a march's trace (its own passes where it has them: MarchInfo::gl_trace) and
+// the stages after it. See gl_state.h.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -14,35 +15,33 @@
 namespace glint::gl {
 
 Image GlState::trace(const TraceInputs& in, const TraceOptions& opt) {
-  const int w = in.position.width, h = in.position.height;
-  const int passes_textures = in.specular ? 4 : 3;
-  const Texture& pos = upload(kIn0, in.position, "trace", passes_textures);
-  const Texture& nrm = upload(kIn1, in.normal, "trace", passes_textures);
-  const Texture* spec = in.specular ? &upload(kIn2, *in.specular, "trace", passes_textures) : nullptr;
   const MarchInfo& info = march_info(opt.march);
-  const Texture* back = in.back_position && info.uses_back_position
-                            ? &upload(kAux, *in.back_position, "trace", passes_textures + 1)
-                            : nullptr;
-  if (info.id == March::Hiz) build_pyramid(in, opt, pos, nrm, back);
+  if (info.gl_trace) return info.gl_trace(*this, in, opt);
+  const TraceTextures t = upload_trace_inputs(in, info);
   const GLuint prog = program(info.gl_program);
-  trace_uniforms(prog, in, opt, pos, nrm, spec, back);
-  if (hiz_reuses_rays(opt)) {
-    const GLuint list = program("trace_hiz_list.comp");
-    trace_uniforms(list, in, opt, pos, nrm, spec, back);
-    return trace_reusing(prog, list, pos, nrm, spec, w, h, passes_textures);
-  }
+  trace_uniforms(prog, in, opt, t);
   gl_.UseProgram(prog);
-  return draw_and_read(w, h, info.name, passes_textures);
+  return draw_and_read(in.position.width, in.position.height, info.name, t.count);
 }
 
-void GlState::trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
-                             const Texture& nrm, const Texture* spec, const Texture* back) {
+GlState::TraceTextures GlState::upload_trace_inputs(const TraceInputs& in, const MarchInfo& info) {
+  TraceTextures t;
+  t.count = in.specular ? 4 : 3;
+  t.pos = &upload(kIn0, in.position, "trace", t.count);
+  t.nrm = &upload(kIn1, in.normal, "trace", t.count);
+  t.spec = in.specular ? &upload(kIn2, *in.specular, "trace", t.count) : nullptr;
+  t.back = in.back_position && info.uses_back_position ? &upload(kAux, *in.back_position, "trace", t.count + 1)
+                                                       : nullptr;
+  return t;
+}
+
+void GlState::trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOptions& opt, const TraceTextures& t) {
   gl_.UseProgram(prog);
-  bind(prog, "u_position", 0, pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  bind(prog, "u_normal", 1, nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(prog, "u_position", 0, *t.pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  bind(prog, "u_normal", 1, *t.nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
   // An unused sampler still needs a complete texture bound; reuse the normal one.
-  bind(prog, "u_specular", 2, spec ? *spec : nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  gl_.Uniform1i(loc(prog, "u_has_specular"), spec ? 1 : 0);
+  bind(prog, "u_specular", 2, t.spec ? *t.spec : *t.nrm, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  gl_.Uniform1i(loc(prog, "u_has_specular"), t.spec ? 1 : 0);
   float pf[16];
   for (int i = 0; i < 16; ++i) pf[i] = static_cast<float>(in.projection.m[i]);
   gl_.Uniform1fv(loc(prog, "u_proj"), 16, pf);
@@ -58,75 +57,6 @@ void GlState::trace_uniforms(GLuint prog, const TraceInputs& in, const TraceOpti
   gl_.Uniform1i(loc(prog, "u_steps"), opt.steps);
   const float r = opt.resolution;
   gl_.Uniform1f(loc(prog, "u_resolution"), r < 0.0f ? 0.0f : (r > 1.0f ? 1.0f : r));
-  if (opt.march != March::Hiz) return;
-  bind_hiz_inputs(prog, in, pos, back);
-  gl_.ActiveTexture(GL_TEXTURE0 + 4);
-  gl_.BindTexture(GL_TEXTURE_2D, pyramid_.id);
-  gl_.Uniform1i(loc(prog, "u_pyramid"), 4);
-  gl_.Uniform1i(loc(prog, "u_levels"), pyramid_.levels);
-  gl_.BindImageTexture(5, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  gl_.BindImageTexture(6, textures_[kPlanes].id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  gl_.Uniform1i(loc(prog, "u_pass"), 0);
-  gl_.Uniform1i(loc(prog, "u_blocked"), opt.blocked == Blocked::Occluder ? 1 : 0);
-}
-
-Image GlState::trace_reusing(GLuint prog, GLuint list, const Texture& pos, const Texture& nrm,
-                             const Texture* spec, int w, int h, int textures) {
-  const char* pass = "hiz";
-  // 1. Pixel (2x, 2y) of the frame into pixel (x, y) of a half-size target.
-  gl_.UseProgram(prog);
-  gl_.Uniform1i(loc(prog, "u_pass"), 1);
-  const int cw = (w + 1) / 2, ch = (h + 1) / 2;
-  const Texture& quarter = target(kCoarse, cw, ch, pass, textures + 2);
-  attach(quarter);
-  draw(cw, ch);
-  // 2. Every 2x2 quad: the quarter spread where it agrees; the rest listed.
-  const Texture& out = target(kOut, w, h, pass, textures + 2);
-  const GLuint rays = hiz_ray_list(w, h);
-  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rays);
-  gl_.BindImageTexture(0, out.id, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-  const GLuint fill = program("trace_hiz_fill.comp");
-  gl_.UseProgram(fill);
-  gl_.BindImageTexture(1, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  gl_.BindImageTexture(2, nrm.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  // An unused image unit still needs an image bound: the normals stand in.
-  gl_.BindImageTexture(3, (spec ? *spec : nrm).id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  gl_.BindImageTexture(4, quarter.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  gl_.Uniform1i(loc(fill, "u_has_specular"), spec ? 1 : 0);
-  gl_.Uniform2f(loc(fill, "u_size"), static_cast<float>(w), static_cast<float>(h));
-  dispatch(fill, cw, ch);
-  // 3. The dispatch's size from the list's length, on the GPU: no read-back.
-  gl_.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-  gl_.UseProgram(program("hiz_rays_args.comp"));
-  gl_.DispatchCompute(1, 1, 1);
-  // 4. The listed pixels' walks, written into the frame beside the fill's.
-  gl_.MemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-  gl_.UseProgram(list);
-  gl_.BindBuffer(GL_DISPATCH_INDIRECT_BUFFER, rays);
-  gl_.DispatchComputeIndirect(0);
-  gl_.MemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
-  attach(out);
-  debug_check(pass);
-  return read(w, h, GL_COLOR_ATTACHMENT0, pass);
-}
-
-void GlState::build_pyramid(const TraceInputs& in, const TraceOptions& opt, const Texture& pos,
-                   const Texture& nrm, const Texture* back) {
-  const int w = in.position.width, h = in.position.height;
-  mip_target(pyramid_, w, h, GL_RG32F, "the hiz pyramid", 1, "the hiz pyramid");
-  const Texture& planes = target(kPlanes, w, h, "the hiz plane normals", 1);
-  // The base level and the plane normals (which the walk reads) in one pass.
-  const GLuint base = program("hiz_base.frag");
-  gl_.UseProgram(base);
-  gl_.BindImageTexture(0, pos.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  gl_.BindImageTexture(1, nrm.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  bind_hiz_inputs(base, in, pos, back);
-  gl_.Uniform2f(loc(base, "u_size"), static_cast<float>(w), static_cast<float>(h));
-  gl_.Uniform1f(loc(base, "u_thickness"), opt.thickness);
-  attach_level(pyramid_.id, 0, &planes);
-  draw(w, h);
-  reduce_levels(pyramid_.id, pyramid_.levels, GL_RG32F, program("hiz_reduce.frag"), w, h);
-  debug_check("hiz pyramid");
 }
 
 void GlState::reduce_levels(GLuint tex, int levels, GLenum format, GLuint reduce, int w, int h) {
@@ -141,16 +71,6 @@ void GlState::reduce_levels(GLuint tex, int levels, GLenum format, GLuint reduce
     sw = dw;
     sh = dh;
   }
-}
-
-void GlState::bind_hiz_inputs(GLuint prog, const TraceInputs& in, const Texture& pos, const Texture* back) {
-  const Mat4 inv = inverse(in.projection);
-  float f[16];
-  for (int k = 0; k < 16; ++k) f[k] = static_cast<float>(inv.m[k]);
-  gl_.Uniform1fv(loc(prog, "u_inv"), 16, f);
-  // An unused sampler still needs a complete texture: the position stands in.
-  bind(prog, "u_back", 3, back ? *back : pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
-  gl_.Uniform1i(loc(prog, "u_has_back"), back ? 1 : 0);
 }
 
 Image GlState::reflection_color(const Image& uv, const Image& color) {

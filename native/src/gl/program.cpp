@@ -121,7 +121,9 @@ GLuint compile_source(const Api& gl, GLenum stage, const std::string& source,
 
 GLuint compile_embedded(const Api& gl, const std::string& entry) {
   const EmbeddedShader* s = find_embedded_shader(entry);
-  if (!s) throw Error("glint GL: no embedded shader named \"" + entry + "\" (list it in native/CMakeLists.txt)");
+  if (!s)
+    throw Error("glint GL: no embedded shader named \"" + entry +
+                "\" (list it in native/CMakeLists.txt, or a march's with glint_march_shaders() in its folder)");
   return compile_source(gl, stage_of(entry), s->source, entry);
 }
 

@@ -21,10 +21,9 @@ GlState::GlState(const std::string& egl_library) : ctx_(egl_library), gl_(ctx_.a
 GlState::~GlState() {
   for (auto& kv : programs_) gl_.DeleteProgram(kv.second);
   for (Texture& t : textures_) release(t);
-  if (pyramid_.id) gl_.DeleteTextures(1, &pyramid_.id);
+  for (auto& kv : march_objects_) kv.second->release(gl_);
   if (cone_chain_.id) gl_.DeleteTextures(1, &cone_chain_.id);
   release(env_brdf_);
-  if (hiz_rays_) gl_.DeleteBuffers(1, &hiz_rays_);
   release_raster();
   gl_.DeleteFramebuffers(1, &fbo_);
   gl_.DeleteVertexArrays(1, &empty_vao_);
@@ -131,7 +130,10 @@ void GlState::out_of_memory(int w, int h, const char* pass, int textures) {
 }
 
 GlState::Texture& GlState::target(Slot slot, int w, int h, const char* pass, int textures) {
-  Texture& t = textures_[slot];
+  return target(textures_[slot], w, h, pass, textures);
+}
+
+GlState::Texture& GlState::target(Texture& t, int w, int h, const char* pass, int textures) {
   if (t.id && t.w == w && t.h == h) return t;
   release(t);
   check_size(w, h, pass, textures);
@@ -186,34 +188,6 @@ GLuint GlState::program(const std::string& frag, const char* vert) {
   const GLuint p = compute ? link_program(gl_, {frag}) : link_program(gl_, {vert, frag});
   programs_[frag] = p;
   return p;
-}
-
-GLuint GlState::hiz_ray_list(int w, int h) {
-  // The traced quarter is never listed: room for the other pixels only.
-  const size_t all = static_cast<size_t>(w) * static_cast<size_t>(h);
-  const size_t quarter = static_cast<size_t>((w + 1) / 2) * static_cast<size_t>((h + 1) / 2);
-  const size_t bytes = (4 + all - quarter) * sizeof(GLuint);
-  // A shader sees at most GL_MAX_SHADER_STORAGE_BLOCK_SIZE bytes of the
-  // buffer (2^24 at the least; llvmpipe 2^27, enough for 8K): past it the
-  // list would be cut silently, so the frame is refused, as check_size() does.
-  GLint64 limit = 0;
-  gl_.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &limit);
-  if (limit > 0 && bytes > static_cast<size_t>(limit))
-    throw Error("glint GL: " + size_text(w, h) + " is too large for the hiz march's reuse of rays on " +
-                info().renderer + ": its list of rays needs " + mib(double(bytes)) +
-                " MiB, GL_MAX_SHADER_STORAGE_BLOCK_SIZE is " + mib(double(limit)) +
-                " MiB. Use resolution above 0.5 or backend=\"cpu\" for this size.");
-  if (bytes > hiz_rays_bytes_) {
-    hiz_rays_bytes_ = 0;  // until the larger store exists
-    buffer_data(hiz_rays_, GL_SHADER_STORAGE_BUFFER, bytes, nullptr, "hiz march's list of rays", GL_DYNAMIC_COPY);
-    hiz_rays_bytes_ = bytes;
-  } else {
-    gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, hiz_rays_);
-  }
-  // groups_x, groups_y, groups_z, count (hiz_rays.glsl).
-  const GLuint header[4] = {0, 1, 1, 0};
-  gl_.BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof header, header);
-  return hiz_rays_;
 }
 
 void GlState::attach(const Texture& t) {

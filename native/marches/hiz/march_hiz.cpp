@@ -23,14 +23,13 @@
 #include <cmath>
 #include <limits>
 
+#include "cpu/ray.h"
 #include "glint/errors.h"
 #include "glint/marches.h"
 #include "glint/schema.h"
 #include "glint/stages.h"
 #include "hiz.h"
 #include "parallel.h"
-#include "ray.h"
-#include "trace.h"
 
 namespace glint::cpu {
 namespace {

@@ -1,6 +1,6 @@
 #version 430 core
 // The hiz march's reuse of rays (trace_hiz() and reuse_neighbours() in
-// native/src/cpu/march_hiz.cpp, same tests on the same values): after
+// march_hiz.cpp, same tests on the same values): after
 // trace_hiz.frag traced every other pixel of every other row into u_coarse,
 // an invocation per 2x2 quad of the frame. Its traced corner pixel is copied;
 // each other pixel takes what its traced neighbours agree on, and where they

@@ -1,7 +1,7 @@
 // The "hiz" march's walk: the Hi-Z pyramid (hiz_base.frag, hiz_reduce.frag)
 // walked cell by cell along the reflected ray's screen-space line. A port of
-// hiz_walk_scalar() in native/src/cpu/hiz_walk.cpp (the walk, which explains
-// each step) and of native/src/cpu/march_hiz.cpp (the ray, the texel test);
+// hiz_walk_scalar() in hiz_walk.cpp (the walk, which explains
+// each step) and of march_hiz.cpp (the ray, the texel test);
 // same operations in the same order. trace_pixel() returns (u, v, visibility,
 // visibility) at a hit (its confidence times the fade at the screen's edge),
 // with u_blocked an occluder's (u, v, fade, 0), else 0. Apart from

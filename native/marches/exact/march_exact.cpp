@@ -23,12 +23,12 @@
 #include <string>
 #include <vector>
 
+#include "cpu/ray.h"
+#include "exact.h"
 #include "glint/errors.h"
 #include "glint/exact_scene.h"
 #include "glint/mesh.h"
 #include "parallel.h"
-#include "ray.h"
-#include "trace.h"
 
 namespace glint {
 namespace {

@@ -1,6 +1,7 @@
-// The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's). The GL
-// backend runs the same steps in shaders/hiz_base.frag, hiz_reduce.frag and
-// trace_hiz.frag; docs/marches.md explains the method.
+// The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's), and its
+// entry points on both backends. The GL backend runs the same steps in
+// hiz_base.frag, hiz_reduce.frag and trace_hiz.frag (gl_passes.cpp);
+// docs/marches.md explains the method.
 #pragma once
 #include <cstddef>
 #include <vector>
@@ -8,8 +9,29 @@
 #include "glint/image.h"
 #include "glint/options.h"
 #include "glint/projection.h"
+#include "glint/schema.h"
 #include "glint/stages.h"
 #include "hiz_walk.h"
+
+namespace glint {
+
+// The hiz march at resolution <= kHizReuseResolution traces every other pixel
+// of every other row first, and each other pixel only where those traced
+// around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
+// backends decide by this.
+constexpr float kHizReuseResolution = hiz::kReuseResolution;
+inline bool hiz_reuses_rays(const TraceOptions& o) {
+  return o.march == March::Hiz && o.resolution <= kHizReuseResolution;
+}
+
+namespace gl {
+class GlState;
+// The march on the GL backend (gl_passes.cpp): the pyramid, then the trace,
+// reusing rays as the CPU does. The row's gl_trace.
+Image trace_hiz(GlState& gl, const TraceInputs& in, const TraceOptions& opt);
+}  // namespace gl
+
+}  // namespace glint
 
 namespace glint::cpu {
 
@@ -81,8 +103,11 @@ void hiz_plane_normals_row(const Image& position, const Image& normal, const See
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes);
 
-// trace_hiz() (trace.h) with the given walk, which must be available: the
-// tests hold the walks to the same answers.
+// The whole frame on the CPU, with the walk hiz_walk_default() picks: the
+// `cpu` entry of the march's row (march.cpp).
+Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);
+// The same with the given walk, which must be available: the tests hold the
+// walks to the same answers.
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, WalkIsa isa);
 
 }  // namespace glint::cpu

@@ -1,7 +1,7 @@
 // The hiz march's plane normals: each texel's geometric normal from the
 // position buffer, the shading normal where that cannot be had. hiz_base.frag
 // writes them once per frame, beside the pyramid's base, for hiz_walk.glsl.
-// hiz_plane_normals_row() in native/src/cpu/hiz_planes.cpp, operation for
+// hiz_plane_normals_row() in hiz_planes.cpp, operation for
 // operation. Needs common.glsl and trace_common.glsl.
 
 // The G-buffer's position and normal textures, read as images: the plane

@@ -5,7 +5,7 @@
 // instructions each, which leaves a core mostly waiting on the chain; rays
 // are independent, so on AVX2 one chain of vector steps walks eight of them,
 // each in its own lane (hiz_walk_avx2.cpp), with the scalar walk's answers
-// bit for bit. shaders/hiz_walk.glsl is the same walk on GL.
+// bit for bit. hiz_walk.glsl is the same walk on GL.
 #pragma once
 
 namespace glint::cpu {

@@ -1,6 +1,6 @@
 // What the Hi-Z base level and the Hi-Z walk share: the tangent plane of a
 // texel in NDC and its depth there, and a texel's thickness. Ports of the
-// helpers in native/src/cpu/march_hiz.cpp, same operation order.
+// helpers in march_hiz.cpp, same operation order.
 // Needs common.glsl and trace_common.glsl. Its constants (FOOTPRINT_SPREAD,
 // CELL_NUDGE, EDGE_FADE ...) are schema.glsl's.
 

@@ -2,7 +2,7 @@
 // Level 0 of the Hi-Z pyramid: each seen texel's nearest view distance over
 // its footprint (its tangent plane at the four corners) and its farthest plus
 // its thickness; (+inf, -inf) where nothing was seen. base_range() in
-// native/src/cpu/march_hiz.cpp, operation for operation. The texel's plane
+// march_hiz.cpp, operation for operation. The texel's plane
 // normal (hiz_planes.glsl) is worked out here and written beside it for the
 // walk: one pass over the G-buffer instead of two.
 #include "common.glsl"
