@@ -16,23 +16,31 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 blender=${BLENDER:-blender}
 command -v "$blender" >/dev/null || { echo "install_addon: $blender not found" >&2; exit 1; }
 
-if [[ ${1:-} == --package ]]; then
-  pkg=$(mktemp -d)/glint.zip
-  BLENDER=$blender bash "$root/scripts/build_addon_zip.sh" "${GLINT_BUILD_DIR:-$root/build}" "$pkg"
-  if "$blender" --command extension install-file --help >/dev/null 2>&1; then
-    "$blender" --command extension install-file -r user_default -e "$pkg"
-    echo "install_addon: installed and enabled the extension"
-  else
-    "$blender" -b --python-expr "
+# Enable the add-on (after PRE, Python run first) and save the user's preferences.
+enable_and_save() {  # PRE MESSAGE
+  "$blender" -b --python-expr "
 import bpy, sys
-bpy.ops.preferences.addon_install(filepath='$pkg', overwrite=True)
+$1
 bpy.ops.preferences.addon_enable(module='glint')
 if 'glint' not in bpy.context.preferences.addons:
     sys.exit('install_addon: enabling the add-on failed')
 bpy.context.preferences.is_dirty = True
 bpy.ops.wm.save_userpref()
-print('install_addon: installed the add-on zip and enabled it')
+print('install_addon: $2')
 " 2>&1 | grep -E '^install_addon|Error|rror:' || true
+}
+
+if [[ ${1:-} == --package ]]; then
+  pkg=$(mktemp -d)/glint.zip
+  BLENDER=$blender bash "$root/scripts/build_addon_zip.sh" "${GLINT_BUILD_DIR:-$root/build}" "$pkg"
+  # What was built decides: an extension carries blender_manifest.toml.
+  if "${GLINT_PYTHON:-/usr/bin/python3}" -c "import sys, zipfile
+sys.exit(0 if any(n.endswith('blender_manifest.toml') for n in zipfile.ZipFile(sys.argv[1]).namelist()) else 1)" "$pkg"; then
+    "$blender" --command extension install-file -r user_default -e "$pkg"
+    echo "install_addon: installed and enabled the extension"
+  else
+    enable_and_save "bpy.ops.preferences.addon_install(filepath='$pkg', overwrite=True)" \
+      "installed the add-on zip and enabled it"
   fi
   exit 0
 fi
@@ -52,13 +60,5 @@ ln -sfn "$root/addon/glint" "$target"
 echo "install_addon: $target -> $root/addon/glint"
 
 # Enable it and save the preferences (the user's own preferences, kept as they are).
-"$blender" -b --python-expr "
-import bpy, sys
-bpy.ops.preferences.addon_enable(module='glint')
-if 'glint' not in bpy.context.preferences.addons:
-    sys.exit('install_addon: enabling the add-on failed')
-bpy.context.preferences.is_dirty = True
-bpy.ops.wm.save_userpref()
-print('install_addon: enabled in the saved preferences')
-" 2>&1 | grep -E '^install_addon|Error|rror:' || true
+enable_and_save "" "enabled in the saved preferences"
 [[ -d $root/build/python ]] || echo "install_addon: note: no $root/build/python yet; build with scripts/setup.sh (or set GLINT_CORE_PATH)"
