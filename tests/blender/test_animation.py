@@ -71,3 +71,17 @@ def test_a_frame_rendered_alone_matches_the_same_frame_of_the_sequence(animation
     alone = read_exr(os.path.join(out, "frame_0003.exr"))
     in_sequence = read_exr(os.path.join(animation[0], "frame_0003.exr"))
     assert np.abs(alone - in_sequence).max() <= 1e-6
+
+
+def test_the_exact_march_keeps_its_bvh_while_the_camera_moves(blender, samples, tmp_path):
+    """The Exact preset traces against one ExactScene kept in world space: built on
+    the first frame, and only refit or reused on the next ones, where the camera
+    moved and nothing else did (docs/addon.md, the exact march in the add-on)."""
+    out = str(tmp_path / "exact")
+    log = blender.render(samples["animated_camera"], out, {"glint": {"backend": "CPU", "preset": "EXACT"}},
+                         frames=("-s", "1", "-e", "3", "-a"))
+    lines = [line for line in log.splitlines() if line.startswith("Glint: frame ")]
+    assert len(lines) == 3 and all("reflections composited" in line for line in lines), log[-3000:]
+    assert "exact march's BVH built" in lines[0], lines[0]
+    for line in lines[1:]:
+        assert "exact march's BVH refit" in line or "exact march's BVH reused" in line, line
