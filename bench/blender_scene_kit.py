@@ -32,6 +32,17 @@ def frame_size(value):
     return int(w), int(h)
 
 
+def names_among(choices, key):
+    """A parser for ``--key a,b``: the names, each one of ``choices`` (ValueError
+    listing them otherwise)."""
+    def parse(value):
+        names = [v.strip() for v in value.split(",") if v.strip()]
+        if not names or any(n not in choices for n in names):
+            raise ValueError(f"--{key} {value}: choose among {','.join(choices)}")
+        return names
+    return parse
+
+
 def register_addon(parent):
     """Register glint/ from ``parent``; the core comes from GLINT_CORE_PATH
     (default: <checkout>/build/python)."""
@@ -53,6 +64,15 @@ def use_eevee(scene, own_reflections=False):
 def eevee_reflections_name(scene):
     from glint.host import engines
     return engines.eevee_reflections_name(scene)
+
+
+def default_material(name):
+    """A material as Blender makes a new one: Principled defaults (grey, Specular
+    0.5, Roughness 0.5), a rough dielectric reflector."""
+    from glint.host import data
+    mat = bpy.data.materials.new(name)
+    data.enable_nodes(mat)
+    return mat
 
 
 def principled(name, colour, roughness=0.5, specular=0.5, metallic=0.0):

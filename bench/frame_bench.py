@@ -51,18 +51,10 @@ def _args():
         {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO",
          "scenes": ["matte", "default"], "addon": os.path.join(ROOT, "addon")},
         {"size": kit.frame_size, "rounds": int, "samples": int, "preset": str.upper, "backend": str.upper,
-         "scenes": _scene_names, "addon": os.path.abspath})
+         "scenes": kit.names_among(SCENES, "scenes"), "addon": os.path.abspath})
 
 
 SCENES = ("matte", "default")
-
-
-def _scene_names(value):
-    names = [v.strip() for v in value.split(",") if v.strip()]
-    unknown = [n for n in names if n not in SCENES]
-    if unknown or not names:
-        raise ValueError(f"--scenes {value}: choose among {','.join(SCENES)}")
-    return names
 
 
 _register_addon = kit.register_addon
@@ -72,11 +64,8 @@ _material = kit.principled
 
 
 def _object_material(name, colour, materials):
-    if materials == "default":  # a new material as Blender makes it: Principled defaults
-        from glint.host import data
-        mat = bpy.data.materials.new(name)
-        data.enable_nodes(mat)
-        return mat
+    if materials == "default":
+        return kit.default_material(name)
     return _material(name, colour, 0.5, specular=0.0)
 
 

@@ -72,14 +72,6 @@ def _at_least(parse, least, key):
     return check
 
 
-def _scene_names(value):
-    names = [s for s in value.split(",") if s]
-    unknown = [s for s in names if s not in SCENES]
-    if unknown or not names:
-        raise ValueError(f"--scenes {value}: choose among {','.join(SCENES)}")
-    return names
-
-
 def _args():
     return kit.script_options(
         {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
@@ -87,7 +79,8 @@ def _args():
          "scenes": list(SCENES), "cycles-cache": ""},
         {"size": _at_least(kit.frame_size, 8, "size"), "cycles-samples": _at_least(int, 2, "cycles-samples"),
          "eevee-samples": _at_least(int, 2, "eevee-samples"), "rounds": _at_least(int, 1, "rounds"),
-         "threshold": float, "out": os.path.abspath, "addon": os.path.abspath, "scenes": _scene_names,
+         "threshold": float, "out": os.path.abspath, "addon": os.path.abspath,
+         "scenes": kit.names_among(SCENES, "scenes"),
          "cycles-cache": os.path.abspath})
 
 
@@ -135,15 +128,6 @@ def _camera(location, rotation_deg, lens=50.0):
     cam = bpy.context.object
     cam.data.lens = lens
     bpy.context.scene.camera = cam
-
-
-def _default_material(name, colour=None):
-    """A material as Blender makes a new one: Principled defaults (grey, Specular
-    0.5, Roughness 0.5), a rough dielectric reflector; ``colour`` is not used."""
-    from glint.host import data
-    mat = bpy.data.materials.new(name)
-    data.enable_nodes(mat)
-    return mat
 
 
 def _floor_scene(roughness, objects_material=None):
@@ -214,7 +198,7 @@ BUILDERS = {
     "rough": lambda: _floor_scene(0.3),
     "metal": _metal_scene,
     "corridor": _corridor_scene,
-    "default": lambda: _floor_scene(0.1, _default_material),
+    "default": lambda: _floor_scene(0.1, lambda name, colour: kit.default_material(name)),
 }
 
 

@@ -32,14 +32,13 @@ def seen_from_camera(core, triangles: geometry.Triangles, view_to_world):
             update = _scene.update(vertices)
         else:
             _scene = None  # its memory goes before the new one is built
-            tris = np.arange(vertices.shape[0], dtype=np.int32).reshape(-1, 3)
-            _scene = core.ExactScene(vertices, tris)
+            _scene = core.ExactScene(vertices, geometry.corner_triangles(vertices.shape[0]))
             update = _scene.last_update
         return _scene.seen_from(np.asarray(view_to_world, dtype=np.float64)), dict(update)
 
 
 def release() -> None:
-    """Drop the kept scene (a frame without the exact march, or unregister)."""
+    """Drop the kept scene (a frame that does not use the exact march)."""
     global _scene
     with _lock:
         _scene = None

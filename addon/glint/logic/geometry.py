@@ -125,11 +125,17 @@ def normal_map_with_strength(pixels: np.ndarray, strength: float) -> np.ndarray:
     return (n * 0.5 + 0.5).astype(np.float32)
 
 
+def corner_triangles(corners: int) -> np.ndarray:
+    """int32 [corners / 3, 3]: each triangle its own three corners (0 1 2, 3 4 5, ...),
+    the index buffer of the export's unshared corners."""
+    return np.arange(corners, dtype=np.int32).reshape(-1, 3)
+
+
 def trace_mesh(triangles: Triangles):
     """``mesh=(vertices [3T, 3], triangles [T, 3])`` for marches that trace the scene's
     own triangles (the exact march): the export's corners, unshared."""
     vertices = np.ascontiguousarray(triangles.positions.reshape(-1, 3), dtype=np.float32)
-    return vertices, np.arange(vertices.shape[0], dtype=np.int32).reshape(-1, 3)
+    return vertices, corner_triangles(vertices.shape[0])
 
 
 def world_vertices(triangles: Triangles, view_to_world) -> np.ndarray:
