@@ -29,7 +29,7 @@ PLANE_TOLERANCE = _S.PLANE_TOLERANCE
 BEHIND_SLACK = _S.BEHIND_SLACK
 FOOTPRINT_SPREAD = _S.FOOTPRINT_SPREAD
 EDGE_FADE = _S.EDGE_FADE   # share of the screen over which visibility fades at its edges
-UNCERTAIN = _S.UNCERTAIN   # confidence of a hit located only to its texel, or on an outline
+UNCERTAIN = _S.UNCERTAIN   # confidence of a hit located only to its texel, or at an outline texel's edge
 
 
 def _seen(p):
@@ -147,16 +147,20 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
 
     ranges = {}
 
-    def on_outline(x, y):
-        """A neighbour across an edge is unseen or behind the texel's plane by more than
-        its thickness: the plane overhangs the object there."""
+    def outline_confidence(x, y, hx, hy):
+        """A neighbour across an edge that is unseen or behind the texel's plane by
+        more than its thickness puts the object's edge somewhere between the two
+        centres: a hit d texels toward it from the centre is on the object with
+        chance 1 - d (UNCERTAIN at the texel's edge)."""
         p, n = pos[y, x, :3], planes[y, x]
         lim = -texel_thickness(x, y) * np.linalg.norm(n)
-        for qx, qy in ((x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)):
+        dx, dy = hx - (x + 0.5), hy - (y + 0.5)
+        c = 1.0
+        for qx, qy, toward in ((x - 1, y, -dx), (x + 1, y, dx), (x, y - 1, -dy), (x, y + 1, dy)):
             if 0 <= qx < w and 0 <= qy < h:
                 if not _seen(pos[qy, qx]) or n @ (pos[qy, qx, :3] - p) < lim:
-                    return True
-        return False
+                    c = min(c, 1.0 - 2.0 * (1.0 - UNCERTAIN) * min(max(toward, 0.0), 0.5))
+        return c
 
     def near_ok(v):
         c = P @ np.append(v, 1.0)
@@ -233,17 +237,17 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                             break
                         if outcome in ("hit", "hit on plane"):
                             q = f0 + th * d
-                            certain = outcome == "hit on plane" and not on_outline(i, j)
-                            result = q[0] / w, q[1] / h, certain
+                            conf = outline_confidence(i, j, q[0], q[1]) if outcome == "hit on plane" else UNCERTAIN
+                            result = q[0] / w, q[1] / h, conf
                             break
                 t = te
             if result is not None:
-                u, v, certain = result
+                u, v, conf = result
                 fade = min(max(min(u, 1.0 - u, v, 1.0 - v) / EDGE_FADE, 0.0), 1.0)
-                if certain is None:  # the occluder: shown, but no hit found
+                if conf is None:  # the occluder: shown, but no hit found
                     out[y, x] = (u, v, fade, 0.0)
                 else:
-                    vis = (1.0 if certain else UNCERTAIN) * fade
+                    vis = conf * fade
                     out[y, x] = (u, v, vis, vis)
     return out
 

@@ -21,7 +21,7 @@ PLANE_TOLERANCE = 1e-05
 BEHIND_SLACK = 0.001
 # hiz: share of the screen over which visibility fades at its edges
 EDGE_FADE = 0.075
-# hiz: confidence of a hit located only to its texel or on an outline
+# hiz: confidence of a hit located only to its texel, or at the outer edge of an outline texel
 UNCERTAIN = 0.5
 # hiz: a texel's depth range at most this share of its view distance either way
 FOOTPRINT_SPREAD = 0.5

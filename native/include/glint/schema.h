@@ -53,8 +53,10 @@ constexpr float kBehindSlack = 1e-3f;
 // Visibility: how well a hit is located, times a fade over this share of the
 // screen at its edges (Eevee's default edge fading). A hit found on its
 // texel's plane, off any outline, has confidence 1; one located only to its
-// texel (no usable normal, or a plane seen edge-on) or on an outline texel,
-// whose plane may extend past the object, kUncertain.
+// texel (no usable normal, or a plane seen edge-on) kUncertain. On an outline
+// texel, whose plane may extend past the object, confidence falls from 1 on
+// the texel's inner half to kUncertain at its edge facing the outline (the
+// chance that the object still covers the hit, outline_confidence()).
 constexpr float kEdgeFade = 0.075f;
 constexpr float kUncertain = 0.5f;
 // A texel's footprint range is clamped to its centre +- this share of its
@@ -107,7 +109,7 @@ inline constexpr Constant kConstants[] = {
     {"EDGE_FADE", Type::Float, hiz::kEdgeFade, nullptr,
      "hiz: share of the screen over which visibility fades at its edges"},
     {"UNCERTAIN", Type::Float, hiz::kUncertain, nullptr,
-     "hiz: confidence of a hit located only to its texel or on an outline"},
+     "hiz: confidence of a hit located only to its texel, or at the outer edge of an outline texel"},
     {"FOOTPRINT_SPREAD", Type::Float, hiz::kFootprintSpread, nullptr,
      "hiz: a texel's depth range at most this share of its view distance either way"},
     {"REUSE_COS", Type::Float, hiz::kReuseCos, nullptr,

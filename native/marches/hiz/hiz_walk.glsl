@@ -184,28 +184,34 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
   return PASS;
 }
 
-// on_outline() and hit_visibility() in march_hiz.cpp.
-bool on_outline(ivec2 c, vec3 p, vec3 n) {
+// outline_confidence() and hit_visibility() in march_hiz.cpp.
+float outline_confidence(ivec2 c, vec3 p, vec3 n, float hx, float hy) {
   float th = texel_thickness(c, -p.z);
   precise float lim = -th * sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  precise float dx = hx - (float(c.x) + 0.5);
+  precise float dy = hy - (float(c.y) + 0.5);
   ivec2 nb[4] = ivec2[4](c - ivec2(1, 0), c + ivec2(1, 0), c - ivec2(0, 1), c + ivec2(0, 1));
-  bool outline = false;
+  float toward[4] = float[4](-dx, dx, -dy, dy);
+  float conf = 1.0;
   for (int k = 0; k < 4; ++k) {
     ivec2 q = nb[k];
     if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) continue;
     vec4 o = imageLoad(u_position_img, q);
     precise float g = n.x * (o.x - p.x) + n.y * (o.y - p.y) + n.z * (o.z - p.z);
-    if (!texel_seen(o) || g < lim) outline = true;
+    if (texel_seen(o) && g >= lim) continue;
+    float d = min(max(toward[k], 0.0), 0.5);
+    precise float ck = 1.0 - 2.0 * (1.0 - UNCERTAIN) * d;
+    conf = min(conf, ck);
   }
-  return outline;
+  return conf;
 }
 
-float hit_visibility(float u, float v, bool certain) {
+float hit_visibility(float u, float v, float confidence) {
   precise float edge = min(min(u, 1.0 - u), min(v, 1.0 - v));
   precise float fade = edge / EDGE_FADE;
   fade = fade < 0.0 ? 0.0 : fade;
   fade = 1.0 < fade ? 1.0 : fade;
-  precise float vis = (certain ? 1.0 : UNCERTAIN) * fade;
+  precise float vis = confidence * fade;
   return vis;
 }
 
@@ -303,13 +309,15 @@ vec4 trace_pixel(ivec2 origin) {
   // run once per pixel, not once per texel test of any lane.
   if (blocked) {
     vec2 o = (vec2(hit_c) + 0.5) / u_size;
-    return vec4(o, hit_visibility(o.x, o.y, true), 0.0);
+    return vec4(o, hit_visibility(o.x, o.y, 1.0), 0.0);
   }
   if (!hit) return vec4(0.0);
-  precise float u = (g_f0.x + hit_t * g_d.x) / u_size.x;
-  precise float v = (g_f0.y + hit_t * g_d.y) / u_size.y;
+  precise float hx = g_f0.x + hit_t * g_d.x;
+  precise float hy = g_f0.y + hit_t * g_d.y;
+  precise float u = hx / u_size.x;
+  precise float v = hy / u_size.y;
   if (!finite_f(u) || !finite_f(v)) return vec4(0.0);
-  bool certain = hit_located && !on_outline(hit_c, hit_p, hit_n);
-  float vis = hit_visibility(u, v, certain);
+  float conf = hit_located ? outline_confidence(hit_c, hit_p, hit_n, hx, hy) : UNCERTAIN;
+  float vis = hit_visibility(u, v, conf);
   return vec4(u, v, vis, vis);
 }

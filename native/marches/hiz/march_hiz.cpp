@@ -255,31 +255,41 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
   return TexelOutcome::Pass;
 }
 
-// Texel (i, j) lies on an object's outline: a neighbour across one of its
-// edges is unseen or lies behind the texel's plane by more than its
-// thickness. Its plane then covers its whole footprint although the object
-// covers only part of it, so a hit there may belong to what lies beyond.
-bool on_outline(const Image& position, const HizPlanes& normal, const Image* back, float thickness, int i,
-                int j) {
+// How sure a hit at (hx, hy) pixels in texel (i, j) is to lie on the texel's
+// object. The texel is on an outline when a neighbour across one of its edges
+// is unseen or lies behind its plane by more than its thickness: its plane
+// then covers its whole footprint, although the object's edge lies somewhere
+// between its centre (the object: that is where it was sampled) and the
+// neighbour's. With that edge anywhere in between, a hit d texels from the
+// centre toward such a neighbour is on the object with probability 1 - d:
+// 1 on the inner half, falling to kUncertain at the texel's outer edge.
+float outline_confidence(const Image& position, const HizPlanes& normal, const Image* back, float thickness,
+                         int i, int j, float hx, float hy) {
   const float* p = position.px(i, j);
   const float* n = normal.px(i, j);
   const float th = texel_thickness(position, back, thickness, i, j);
+  const float lim = -th * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const float dx = hx - (static_cast<float>(i) + 0.5f), dy = hy - (static_cast<float>(j) + 0.5f);
   const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
-  for (const auto& q : nb) {
+  const float toward[4] = {-dx, dx, -dy, dy};
+  float c = 1.0f;
+  for (int k = 0; k < 4; ++k) {
+    const int* q = nb[k];
     if (q[0] < 0 || q[1] < 0 || q[0] >= position.width || q[1] >= position.height) continue;
     const float* o = position.px(q[0], q[1]);
-    if (!texel_seen(o)) return true;
     const float g = n[0] * (o[0] - p[0]) + n[1] * (o[1] - p[1]) + n[2] * (o[2] - p[2]);
-    if (g < -th * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) return true;
+    if (texel_seen(o) && g >= lim) continue;
+    const float d = std::min(std::max(toward[k], 0.0f), 0.5f);
+    c = std::min(c, 1.0f - 2.0f * (1.0f - kUncertain) * d);
   }
-  return false;
+  return c;
 }
 
 // Confidence times the fade at the screen's edges, for a hit at (u, v).
-inline float hit_visibility(float u, float v, bool certain) {
+inline float hit_visibility(float u, float v, float confidence) {
   const float edge = std::min(std::min(u, 1.0f - u), std::min(v, 1.0f - v));
   const float fade = std::min(std::max(edge / kEdgeFade, 0.0f), 1.0f);
-  return (certain ? 1.0f : kUncertain) * fade;
+  return confidence * fade;
 }
 
 // A queue of pixels for hiz_walk() to trace, and the scalar parts of their
@@ -343,16 +353,17 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
     const float v = (static_cast<float>(j) + 0.5f) / static_cast<float>(pos.height);
     out[0] = u;
     out[1] = v;
-    out[2] = hit_visibility(u, v, true);
+    out[2] = hit_visibility(u, v, 1.0f);
     return false;
   }
-  const float u = (r.f0[0] + th * r.d[0]) / static_cast<float>(pos.width);
-  const float v = (r.f0[1] + th * r.d[1]) / static_cast<float>(pos.height);
+  const float hx = r.f0[0] + th * r.d[0], hy = r.f0[1] + th * r.d[1];
+  const float u = hx / static_cast<float>(pos.width);
+  const float v = hy / static_cast<float>(pos.height);
   if (!finite(u) || !finite(v)) return false;
-  const bool certain = located && !on_outline(pos, q.planes, back, q.s.opt.thickness, i, j);
+  const float confidence = located ? outline_confidence(pos, q.planes, back, q.s.opt.thickness, i, j, hx, hy) : kUncertain;
   out[0] = u;
   out[1] = v;
-  out[2] = out[3] = hit_visibility(u, v, certain);
+  out[2] = out[3] = hit_visibility(u, v, confidence);
   return false;
 }
 
