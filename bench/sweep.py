@@ -14,8 +14,10 @@ Scenes (--scene, repeatable):
 
 Writes <out>/<scene>.csv (one row per point and backend) and <out>/<scene>_<W>x<H>.png:
 time against recall and against precision, the Pareto front marked, each preset
-labelled. The grid keeps only the knobs each march reads (glint_core.march_details()),
-so a march is never timed twice for a knob it ignores.
+labelled. Where the scene has a specular buffer, only the pixels that reflect are traced
+and scored (trace(specular=...)), as the add-on traces them. The grid keeps only the
+knobs each march reads (glint_core.march_details()), so a march is never timed twice for
+a knob it ignores.
 
   /usr/bin/python3 bench/sweep.py --scene analytic:floor --sizes 960x540 --out docs/sweeps
   /usr/bin/python3 bench/sweep.py --scene blend:blend_samples/mirror_floor.blend --sizes 960x540
@@ -229,6 +231,8 @@ def time_trace(frame, kw, backend, repeat):
         args["mesh"] = (frame["vertices"], frame["triangles"])
     if back and details["uses_back_position"] and "back_position" in frame:
         args["back_position"] = frame["back_position"]
+    if frame.get("specular") is not None:  # only the pixels that reflect, as the add-on traces them
+        args["specular"] = frame["specular"]
     call = lambda: glint_core.trace(frame["position"], frame["normal"], frame["projection"],  # noqa: E731
                                     backend=backend, **args)
     uv = call()  # warm-up: GL programs, Embree's threads, first-touch pages
@@ -247,7 +251,8 @@ def sweep(spec, sizes, marches, grid, backends, repeat, back_layer, log=print, l
         h, w = frame["position"].shape[:2]
         distance = float(frame.get("max_distance", max(grid["max_distance"])))
         exact = glint_core.trace(frame["position"], frame["normal"], frame["projection"], march="exact",
-                                 mesh=(frame["vertices"], frame["triangles"]), max_distance=distance)
+                                 mesh=(frame["vertices"], frame["triangles"]), max_distance=distance,
+                                 specular=frame.get("specular"))
         scale = distance / 15.0
         points = [dict(p, max_distance=p["max_distance"] * scale) for p in grid_points(marches, grid)]
         points += [dict(p, max_distance=p["max_distance"] * scale, thickness=p["thickness"] * scale)

@@ -69,11 +69,13 @@ def test_small_sweep_writes_the_expected_columns(glint, tmp_path):
     presets = {r["preset"] for r in rows}
     assert set(glint.presets()) <= presets
     # The balanced row holds what its own trace scores against the exact march,
-    # scored here by the definition (docs/conventions.md) rather than by compare().
+    # scored here by the definition (docs/conventions.md) rather than by compare(),
+    # over the pixels that reflect (both traced with the specular buffer).
     frame = sweep.analytic_frame("floor", 64, 48)
     exact = glint.trace(frame["position"], frame["normal"], frame["projection"], march="exact",
-                        mesh=(frame["vertices"], frame["triangles"]))
-    uv = glint.trace(frame["position"], frame["normal"], frame["projection"], **glint.presets()["balanced"])
+                        mesh=(frame["vertices"], frame["triangles"]), specular=frame["specular"])
+    uv = glint.trace(frame["position"], frame["normal"], frame["projection"], specular=frame["specular"],
+                     **glint.presets()["balanced"])
     precision, recall = _score(uv, exact[..., :2], exact[..., 2] > 0)
     (row,) = [r for r in rows if r["preset"] == "balanced" and r["back_layer"] == "0"]
     assert float(row["precision"]) == pytest.approx(precision, rel=1e-5)
