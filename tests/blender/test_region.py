@@ -63,5 +63,10 @@ def test_the_region_composites_what_the_whole_frame_does(blender, samples, sessi
     if "bounce" in case:
         assert "second bounce not run" not in logs[False]
     diff = np.abs(frames[False] - frames[True]).max(axis=-1)
-    # bit for bit but for the order of a few float sums in Blender's blur
-    assert diff.max() <= 1e-5, (float(diff.max()), np.argwhere(diff > 1e-5)[:5].tolist())
+    # Bit for bit but for the order of a few float sums, except where the blur
+    # runs: its levels work on the region's canvas, whose edge lies nearer the
+    # hits than the frame's, and Blender's recursive Gaussian is not exactly
+    # the same near a canvas edge (4.3e-4 at most on these frames, measured on
+    # 3.4 in both models, where the frame's values there are 0.04-0.45).
+    tolerance = 1e-3 if "rough" in case else 1e-5
+    assert diff.max() <= tolerance, (float(diff.max()), np.argwhere(diff > tolerance)[:5].tolist())

@@ -58,17 +58,22 @@ reflectors can see each other (``use_bounce``, see :func:`use_second_bounce`).
 
 The region: D is 0 wherever vis is 0, and R differs from D only where lod > 0,
 so the frame changes only inside the bounding box of those pixels
-(:func:`image_region`). The uv and weight images are cut to it, and every node
-that reads only them (both Map UVs, the world path's D) works on that many
-pixels: Blender sizes an operation by its inputs, and Map UV costs about
-100 ns per pixel of its uv input, hit or not. Blender centres a smaller
-canvas on the frame; a Translate by the offset that a 1x1 image holds
-(:func:`region_offset`) puts the result back before it meets anything
-frame-sized (the frame, the engine's passes, the blur). The offset is an
-image, not a node value, because the render composites with a copy of the
-tree taken before Glint knows the frame's region. A debug view or the layers
-EXR wants the whole frame's uv: the region is then the whole frame, and the
-offset 0.
+(:func:`image_region`). The uv and weight images are cut to it, and the whole
+of R is computed on that many pixels: both Map UVs, D on either path, the
+bounce and the blur levels (Blender sizes an operation by its inputs; Map UV
+costs about 100 ns per pixel of its uv input, hit or not, a Fast Gaussian level
+about 220 ns per pixel of its canvas). D is 0 on the region's border (the pad
+has no hit), so the levels see what they would on the frame, up to how
+Blender's recursive Gaussian treats a canvas edge a few sigma away (4e-4 at
+most, tests/blender/test_region.py). Blender centres a smaller canvas on the
+frame; a Translate by the offset that a 1x1 image holds (:func:`region_offset`)
+puts R in its place before it meets the frame. The engine's frame-sized S goes
+the other way: a Translate by minus the offset brings the region's pixels to
+the frame's centre, where the region-sized operation that takes it (C * W
+first, so the region sizes it) reads them. The offset is an image, not a node
+value, because the render composites with a copy of the tree taken before
+Glint knows the frame's region. A debug view or the layers EXR wants the whole
+frame's uv: the region is then the whole frame, and the offset 0.
 
 :func:`evaluate_group` runs the same description on numpy arrays, so tests
 check the wiring against the formula without Blender; it sizes each operation
@@ -167,8 +172,11 @@ def _mix(blend: str, defaults=None):
     return ("mix", {"blend": blend}, defaults or {})
 
 
-def _translate():
-    return ("translate", {}, {})
+def _translate(sign: int = 1):
+    """A Translate by the region's offset (sign 1: a region-sized canvas to its
+    place in the frame) or by minus it (sign -1: the frame moved so that the
+    region's pixels lie where a region-sized canvas centred on it reads them)."""
+    return ("translate", {"sign": sign}, {})
 
 
 def _separate():
@@ -198,19 +206,20 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "sep_uv": _separate(),
     "offset_image": ("image", {"image": IMAGE_OFFSET}, {}),
     "sep_offset": _separate(),
-    # The region's results into the frame (see "The region" above). Whatever
-    # meets a frame-sized input goes through one of these first.
-    "world_to_frame": _translate(),
-    "weighted_to_frame": _translate(),
-    "uv_to_frame": _translate(),
-    "bounce_to_frame": _translate(),
-    "weight_to_frame": _translate(),
-    "sep_uv_frame": _separate(),
-    "sep_weight_frame": _separate(),
+    # The offset the other way, for the engine's frame-sized specular S: moved
+    # by minus the offset, the frame's region lies at its centre, where a
+    # region-sized operation reads a larger input (Blender centres it).
+    "offset_back_x": _math("MULTIPLY", False, {1: -1.0}),
+    "offset_back_y": _math("MULTIPLY", False, {1: -1.0}),
+    # The region's result into the frame (see "The region" above), and S and D
+    # between the two sizes.
+    "reflection_to_frame": _translate(),
+    "delta_to_frame": _translate(),
+    "specular_to_region": _translate(-1),
+    "sep_weight": _separate(),  # the weight image's alpha: the pixel's lod
     # D on a frame-sized canvas, 0 x frame + 1 x D: what the second Map UV
-    # samples (it scales uv by its image's size) and what the blur spreads.
+    # samples (it scales uv by its image's size).
     "bounce_source": _mix("MIX", {0: 1.0}),
-    "blur_source": _mix("MIX", {0: 1.0}),
     "weighted": _mix("MULTIPLY", {0: 1.0}),        # C * W
     "engine_specular": _mix("MULTIPLY", {0: 1.0}),  # S = light * colour
     # Eevee writes its light passes divided by their colour: where the colour is
@@ -254,6 +263,9 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("uv_image", 0, "map_uv", 1),
     ("uv_image", 0, "sep_uv", 0),
     ("offset_image", 0, "sep_offset", 0),
+    ("weight_image", 0, "sep_weight", 0),
+    ("sep_offset", 0, "offset_back_x", 0),
+    ("sep_offset", 1, "offset_back_y", 0),
     ("map_uv", 0, "weighted", 1),
     ("weight_image", 0, "weighted", 2),
     (GROUP_IN, 1, "engine_specular", 1),
@@ -265,48 +277,46 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("finite_r", 0, "finite_specular", 0),
     ("finite_g", 0, "finite_specular", 1),
     ("finite_b", 0, "finite_specular", 2),
-    # the passes' path meets the frame-sized S: C * W and vis go to the frame first
-    ("weighted", 0, "weighted_to_frame", 0),
-    ("uv_image", 0, "uv_to_frame", 0),
-    ("uv_to_frame", 0, "sep_uv_frame", 0),
-    ("sep_uv_frame", 2, "delta", 0),
-    ("weighted_to_frame", 0, "delta", 1),
-    ("finite_specular", 0, "delta", 2),
-    # the world's path stays on the region up to D
+    # the passes' path: the frame-sized S is read on the region (C * W first,
+    # so the region sizes the operation)
+    ("finite_specular", 0, "specular_to_region", 0),
+    ("sep_uv", 2, "delta", 0),
+    ("weighted", 0, "delta", 1),
+    ("specular_to_region", 0, "delta", 2),
+    # the world's path
     ("sep_uv", 2, "world_replaced", 0),
     ("map_uv", 0, "world_replaced", 1),
     (GROUP_IN, 1, "world_replaced", 2),
     ("world_replaced", 0, "world_delta", 1),
     ("weight_image", 0, "world_delta", 2),
-    ("world_delta", 0, "world_to_frame", 0),
     # input 0 when off: the world's path, the passes' nodes not run
-    ("world_to_frame", 0, "use_passes", 0),
+    ("world_delta", 0, "use_passes", 0),
     ("delta", 0, "use_passes", 1),
+    ("use_passes", 0, "delta_to_frame", 0),
     (GROUP_IN, 0, "bounce_source", 1),
-    ("use_passes", 0, "bounce_source", 2),
+    ("delta_to_frame", 0, "bounce_source", 2),
     ("bounce_source", 0, "bounce_map_uv", 0),
     ("uv_image", 0, "bounce_map_uv", 1),
     ("bounce_map_uv", 0, "bounce_weighted", 1),
     ("weight_image", 0, "bounce_weighted", 2),
-    ("bounce_weighted", 0, "bounce_to_frame", 0),
-    ("bounce_source", 0, "bounced", 1),
-    ("bounce_to_frame", 0, "bounced", 2),
+    ("use_passes", 0, "bounced", 1),
+    ("bounce_weighted", 0, "bounced", 2),
     # input 0 when off: D alone, the second Map UV not run
     ("use_passes", 0, "use_bounce", 0),
     ("bounced", 0, "use_bounce", 1),
-    (GROUP_IN, 0, "blur_source", 1),
-    ("use_bounce", 0, "blur_source", 2),
-    ("weight_image", 0, "weight_to_frame", 0),
-    ("weight_to_frame", 0, "sep_weight_frame", 0),
 ]
-# every Translate moves by the region's offset
-for _t in [n for n, (kind, _, _) in GROUP_NODES.items() if kind == "translate"]:
-    GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
+# every Translate moves by the region's offset, or by minus it
+for _t, (kind, props, _) in [(n, v) for n, v in GROUP_NODES.items() if v[0] == "translate"]:
+    if props["sign"] > 0:
+        GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
+    else:
+        GROUP_LINKS += [("offset_back_x", 0, _t, 1), ("offset_back_y", 0, _t, 2)]
+# the blur levels work on the region: D2 is 0 on its border (the pad has no hit)
 for _j in range(1, len(BLUR_LEVELS) + 1):
-    _below = "blur_source" if _j == 1 else f"mix_{_j - 1}"
+    _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
     GROUP_LINKS += [
-        ("blur_source", 0, f"blur_{_j}", 0),
-        ("sep_weight_frame", 3, f"level_{_j}", 0),
+        ("use_bounce", 0, f"blur_{_j}", 0),
+        ("sep_weight", 3, f"level_{_j}", 0),
         (f"level_{_j}", 0, f"mix_{_j}", 0),
         (_below, 0, f"mix_{_j}", 1),
         (f"blur_{_j}", 0, f"mix_{_j}", 2),
@@ -315,15 +325,16 @@ GROUP_LINKS += [
     # the Switch takes input 0 when off: the unblurred D2, levels not run
     ("use_bounce", 0, "use_blur", 0),
     (f"mix_{len(BLUR_LEVELS)}", 0, "use_blur", 1),
+    ("use_blur", 0, "reflection_to_frame", 0),
     (GROUP_IN, 0, "combined", 1),
-    ("use_blur", 0, "combined", 2),
+    ("reflection_to_frame", 0, "combined", 2),
     # output switches: composited / reflection / G-buffer debug image
     ("combined", 0, "show_reflection", 0),
-    ("use_blur", 0, "show_reflection", 1),
+    ("reflection_to_frame", 0, "show_reflection", 1),
     ("show_reflection", 0, "show_debug", 0),
     ("debug_image", 0, "show_debug", 1),
     ("show_debug", 0, GROUP_OUT, 0),
-    ("use_blur", 0, GROUP_OUT, 1),
+    ("reflection_to_frame", 0, GROUP_OUT, 1),
     (GROUP_IN, 0, GROUP_OUT, 2),
     ("uv_image", 0, GROUP_OUT, 3),
     ("sep_uv", 2, GROUP_OUT, 4),
@@ -542,6 +553,21 @@ def _translated(value, dx: float, dy: float, frame_hw) -> np.ndarray:
     return out
 
 
+def _region_of(value, dx: float, dy: float, region_hw, frame_hw) -> np.ndarray:
+    """A frame-sized canvas moved by minus the region's offset (dx, dy), as a
+    region-sized operation reads it (Blender centres the larger canvas on the
+    smaller): the frame's pixels under the region."""
+    h, w = frame_hw
+    bh, bw = region_hw
+    value = np.asarray(value, dtype=np.float32)
+    if value.shape[:2] != (h, w):
+        value = _as_colour(value, (h, w, 4))
+    x0, y0 = dx + (w - bw) / 2.0, dy + (h - bh) / 2.0
+    if x0 != int(x0) or y0 != int(y0) or not (0 <= x0 <= w - bw and 0 <= y0 <= h - bh):
+        raise ValueError(f"a {bw}x{bh} region at offset ({dx}, {dy}) does not lie on the frame's pixels")
+    return value[int(y0):int(y0) + bh, int(x0):int(x0) + bw]
+
+
 def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    map_uv: Callable[[np.ndarray, np.ndarray], np.ndarray],
                    blur: Callable[[np.ndarray, float], np.ndarray],
@@ -605,6 +631,8 @@ def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, 
         return value[..., 3] if index == 1 else value
     if kind == "translate":
         dx, dy = (float(np.asarray(inp(i), np.float32).flat[0]) for i in (1, 2))
+        if props["sign"] < 0:
+            return _region_of(inp(0), -dx, -dy, np.shape(images[IMAGE_UV])[:2], frame_hw)
         return _translated(inp(0), dx, dy, frame_hw)
     if kind == "combine":
         return np.stack([np.broadcast_to(np.asarray(inp(i), np.float32), hw) for i in range(4)], axis=-1)
