@@ -32,6 +32,7 @@ The add-on is registered from this checkout (or --addon, e.g. an older commit's
 """
 from __future__ import annotations
 
+import inspect
 import math
 import os
 import statistics
@@ -142,11 +143,12 @@ def bench_scene(opts, materials):
         """What the next frame's render_pre pays: the images are full-size now
         (the bench's own render_pre cleared the small ones that switching Glint
         off and on again leaves)."""
+        # What render_pre does with no debug view, under the keyword of each
+        # add-on version (a wrong keyword fell back to clearing every image).
+        params = inspect.signature(compositor.clear_images).parameters
+        kw = next(({k: True} for k in ("only_pass_through", "only_mask") if k in params), {})
         t0 = time.perf_counter()
-        try:
-            compositor.clear_images(only_mask=True)  # what render_pre does with no debug view
-        except TypeError:  # an add-on from before the mask-only clear
-            compositor.clear_images()
+        compositor.clear_images(**kw)
         clear_ms.append((time.perf_counter() - t0) * 1e3)
     walls = {"plain": [], "ssr": [], "glint": []}
     stages = {}
