@@ -19,9 +19,13 @@ Scores, over the floor's pixels (the only reflector), sums of absolute values:
            exact march does not have
   outline  the share of the error on the pixels whose exact hit lies on an object's
            outline (a texel next to one of another depth)
+  dimmed   the share of the floor's hits, away from the screen's edges, reported below
+           full visibility (hiz: on an outline texel's outer half, or located only to
+           its texel; the seed: its own fades), and the share of those hits' light
+           that the dimming takes (light lost)
 
   /usr/bin/python3 bench/motion_bench.py [--sizes 480x270,960x540] [--frames 24]
-      [--marches seed,draft,balanced,high]
+      [--marches seed,draft,balanced,high] [--backend cpu|gl]
 
 The camera slides sideways and a little forward, about 1.5 pixels of screen motion per
 frame at 480x270 for the nearer sphere; the pillars are about 4 pixels wide at 480x270.
@@ -185,13 +189,23 @@ def march_options(name: str):
     return dict(glint_core.presets()[name], max_distance=MAX_DISTANCE)
 
 
-def run(size, frames, marches):
+def dimming(uv: np.ndarray, floor: np.ndarray):
+    """(share of the hits below full visibility, share of their light lost), over the
+    floor's hits away from the screen's edges (where the fade is the only dimming)."""
+    hits = (uv[..., 2] > 0) & (edge_fade(uv) >= 1.0) & floor
+    conf = uv[..., 2][hits]
+    if conf.size == 0:
+        return 0.0, 0.0
+    return float((conf < 1 - 1e-6).mean()), float((1.0 - np.minimum(conf, 1.0)).mean())
+
+
+def run(size, frames, marches, backend="cpu"):
     w, h = size
     v_world, t, mat = scene()
     exact_scene = glint_core.ExactScene(v_world.astype(np.float32), t)
     proj = projection(w, h)
     prev = {}
-    rows = {m: {"error": [], "change": [], "flicker": [], "outline": []} for m in marches + ["exact"]}
+    rows = {m: {k: [] for k in ("error", "change", "flicker", "outline", "dimmed", "lost")} for m in marches + ["exact"]}
     for f in range(frames + 1):
         cam = camera(f)
         g, colour, _ = render(v_world, t, mat, cam, w, h)
@@ -206,9 +220,11 @@ def run(size, frames, marches):
         on_outline = hit & outline_texels(P)[hy, hx] & floor
         E_plain = sample(colour, exact_uv)
         cur = {"exact": (E_plain, E_plain)}
+        dims = {"exact": dimming(exact_uv, floor)}
         for m in marches:
             opts = march_options(m)
-            uv = glint_core.trace(P, N, proj, specular=S, back_position=B, **opts)
+            uv = glint_core.trace(P, N, proj, specular=S, back_position=B, backend=backend, **opts)
+            dims[m] = dimming(uv, floor)
             E = E_plain
             if opts.get("march") == "hiz":
                 faded = exact_uv.copy()
@@ -221,6 +237,8 @@ def run(size, frames, marches):
             if f > 0:  # frame 0 only starts the changes
                 rows[m]["error"].append(diff[floor].sum() / norm)
                 rows[m]["outline"].append(diff[on_outline].sum() / (diff[floor].sum() + 1e-12))
+                rows[m]["dimmed"].append(dims[m][0])
+                rows[m]["lost"].append(dims[m][1])
                 Rp, Ep = prev[m]
                 both = floor & prev["floor"]
                 rows[m]["change"].append(np.abs(R - Rp)[both].sum() / norm)
@@ -235,19 +253,21 @@ def main():
     ap.add_argument("--sizes", default="480x270,960x540")
     ap.add_argument("--frames", type=int, default=24)
     ap.add_argument("--marches", default="seed,draft,balanced,high")
+    ap.add_argument("--backend", default="cpu", help="the marches' backend (the exact march runs on the CPU)")
     args = ap.parse_args()
     marches = args.marches.split(",")
-    print(f"| size | march | error | change | change / exact's | flicker | error on outlines |"
-          f"  ({args.frames} frames, medians)")
-    print("|---|---|---|---|---|---|---|")
+    print(f"| size | march | error | change | change / exact's | flicker | error on outlines | hits dimmed "
+          f"| light lost |  ({args.frames} frames, medians, backend {args.backend})")
+    print("|---|---|---|---|---|---|---|---|---|")
     for size in args.sizes.split(","):
         w, h = (int(v) for v in size.split("x"))
-        res = run((w, h), args.frames, marches)
+        res = run((w, h), args.frames, marches, args.backend)
         base = res["exact"]["change"]
         for m in ["exact"] + marches:
             r = res[m]
             print(f"| {w}x{h} | {m} | {r['error']:.4f} | {r['change']:.4f} | {r['change'] / base:.2f}x | "
-                  f"{r['flicker']:.4f} | {100 * r['outline']:.0f}% |", flush=True)
+                  f"{r['flicker']:.4f} | {100 * r['outline']:.0f}% | {100 * r['dimmed']:.1f}% | "
+                  f"{100 * r['lost']:.2f}% |", flush=True)
 
 
 if __name__ == "__main__":
