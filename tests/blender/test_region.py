@@ -30,6 +30,8 @@ scene.glint.second_bounce = "ON"
 """
 CASES = {
     "tiled-world-mirror": ("TILED", ""),
+    # the engine's frame-sized S read on the region (a Translate by minus the offset)
+    "tiled-passes-mirror": ("TILED", TEXTURED_WORLD),
     "fullframe-passes-bounce-rough": ("FULL_FRAME", TEXTURED_WORLD + ROUGH_FLOOR + METAL_SPHERE),
     "tiled-world-bounce-rough": ("TILED", ROUGH_FLOOR + METAL_SPHERE),
 }
