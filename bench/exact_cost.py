@@ -29,6 +29,7 @@ import numpy as np
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(root, "build")), "python"))
 import glint_core  # noqa: E402
+from scene_meshes import box  # noqa: E402  (bench/, beside this script)
 
 # The camera 2 above the floor, looking 20 degrees down along -z (world y is up).
 EYE = np.array([0.0, 2.0, 0.0])
@@ -56,11 +57,9 @@ def boxes(count: int, offset=(0.0, 0.0, 0.0)):
     for k in range(count):
         c = rng.uniform([-8, 0.3, -30], [8, 1.5, -4]) + offset
         s = rng.uniform(0.2, 0.6, 3)
-        corners = np.array([[(c - s)[j] if (m >> j) & 1 == 0 else (c + s)[j] for j in range(3)] for m in range(8)])
-        f = np.array([[0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
-                      [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5]]) + 8 * k
+        corners, f = box(c - s, c + s)
         verts.append(corners)
-        tris.append(f)
+        tris.append(f + 8 * k)
     return np.concatenate(verts), np.concatenate(tris).astype(np.int32)
 
 

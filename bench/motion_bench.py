@@ -44,6 +44,7 @@ import numpy as np
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(root, "build")), "python"))
 import glint_core  # noqa: E402
+from scene_meshes import box, perspective  # noqa: E402  (bench/, beside this script)
 
 CONSTANTS = glint_core.schema()["constants"]
 MAX_DISTANCE = 40.0
@@ -53,14 +54,6 @@ HALF_FOV = 0.5  # radians, vertical: f = (h / 2) / tan(0.5), 247 px at 270 rows
 # Screen motion: the near sphere (6.5 ahead) moves ~1.5 px per frame at 270 rows.
 STEP = np.array([1.5 * 6.5 / (135.0 / math.tan(HALF_FOV)), 0.0, -0.02])
 PILLAR_WIDTH = 4.0 * 11.0 / (135.0 / math.tan(HALF_FOV))  # ~4 px at 270 rows, 11 ahead
-
-
-def _box(lo, hi):
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    c = np.array([[hi[j] if (m >> j) & 1 else lo[j] for j in range(3)] for m in range(8)])
-    f = np.array([[0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
-                  [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5]])
-    return c, f
 
 
 def _sphere(centre, r, seg=48):
@@ -99,8 +92,8 @@ def scene():
     """World-space (vertices [N, 3], triangles [M, 3], material per triangle): material 0
     the mirror floor, 1 the objects (not reflective)."""
     parts = [_floor(), _sphere((-1.0, 0.8, -6.5), 0.8), _sphere((1.4, 0.5, -5.2), 0.5),
-             _box((2.4, 0.0, -9.5), (3.4, 1.2, -8.5))]
-    parts += [_box((x, 0.0, -11.0 - 0.5 * k), (x + PILLAR_WIDTH, 3.0, -11.0 - 0.5 * k + PILLAR_WIDTH))
+             box((2.4, 0.0, -9.5), (3.4, 1.2, -8.5))]
+    parts += [box((x, 0.0, -11.0 - 0.5 * k), (x + PILLAR_WIDTH, 3.0, -11.0 - 0.5 * k + PILLAR_WIDTH))
               for k, x in enumerate((-3.2, -2.0, 0.3, 1.9))]
     verts, tris, mats, base = [], [], [], 0
     for k, (v, t) in enumerate(parts):
@@ -117,15 +110,12 @@ def camera(frame: int) -> np.ndarray:
     cp, sp = math.cos(PITCH), math.sin(PITCH)
     m = np.eye(4)
     m[:3, :3] = np.array([[1, 0, 0], [0, cp, sp], [0, -sp, cp]])
-    m[:3, 3] = EYE + STEP * (frame - 0.0) + np.array([-0.5, 0.0, 0.0])
+    m[:3, 3] = EYE + np.array([-0.5, 0.0, 0.0]) + STEP * frame
     return m
 
 
 def projection(w: int, h: int) -> np.ndarray:
-    t = 1.0 / math.tan(HALF_FOV)
-    near, far = 0.1, 100.0
-    return np.array([[t * h / w, 0, 0, 0], [0, t, 0, 0],
-                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]], np.float32)
+    return perspective(w, h, fov=2.0 * HALF_FOV)
 
 
 def texture(world: np.ndarray) -> np.ndarray:
@@ -148,7 +138,7 @@ def render(v_world, t, mat, cam, w, h):
     seen = p[..., 3] > 0
     world = p[..., :3] @ cam[:3, :3].T + cam[:3, 3]
     colour = np.where(seen[..., None], texture(world), 0.0).astype(np.float32)
-    return g, colour, v_view
+    return g, colour
 
 
 def sample(colour: np.ndarray, uv: np.ndarray) -> np.ndarray:
@@ -208,7 +198,7 @@ def run(size, frames, marches, backend="cpu"):
     rows = {m: {k: [] for k in ("error", "change", "flicker", "outline", "dimmed", "lost")} for m in marches + ["exact"]}
     for f in range(frames + 1):
         cam = camera(f)
-        g, colour, _ = render(v_world, t, mat, cam, w, h)
+        g, colour = render(v_world, t, mat, cam, w, h)
         P, N, S, B = g["position"], g["normal"], g["specular"], g["back_position"]
         floor = S[..., :3].mean(-1) > 0
         exact_uv = glint_core.trace(P, N, proj, march="exact", mesh=exact_scene.seen_from(cam), specular=S,
@@ -219,18 +209,17 @@ def run(size, frames, marches, backend="cpu"):
         hy = np.clip((exact_uv[..., 1] * h).astype(int), 0, h - 1)
         on_outline = hit & outline_texels(P)[hy, hx] & floor
         E_plain = sample(colour, exact_uv)
+        # what a march that fades at the screen's edges is scored against
+        faded = exact_uv.copy()
+        faded[..., 2] *= edge_fade(exact_uv)
+        E_faded = sample(colour, faded)
         cur = {"exact": (E_plain, E_plain)}
         dims = {"exact": dimming(exact_uv, floor)}
         for m in marches:
             opts = march_options(m)
             uv = glint_core.trace(P, N, proj, specular=S, back_position=B, backend=backend, **opts)
             dims[m] = dimming(uv, floor)
-            E = E_plain
-            if opts.get("march") == "hiz":
-                faded = exact_uv.copy()
-                faded[..., 2] *= edge_fade(exact_uv)
-                E = sample(colour, faded)
-            cur[m] = (sample(colour, uv), E)
+            cur[m] = (sample(colour, uv), E_faded if opts.get("march") == "hiz" else E_plain)
         for m, (R, E) in cur.items():
             norm = np.abs(E[floor]).sum() + 1e-12
             diff = np.abs(R - E)

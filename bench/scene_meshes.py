@@ -37,6 +37,18 @@ def sphere(seg, centre=(0.0, 0.0, -6.0), r=1.0, mat=2):
     return p, dirs.astype(np.float32), np.full(len(p), mat, np.int32)
 
 
+# A box's 12 triangles over its corners, corner m taking hi on axis j where bit j of m is set.
+BOX_FACES = np.array([[0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
+                      [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5]])
+
+
+def box(lo, hi):
+    """An axis-aligned box from corner lo to corner hi: (corners [8, 3], triangles [12, 3])."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    corners = np.array([[hi[j] if (m >> j) & 1 else lo[j] for j in range(3)] for m in range(8)])
+    return corners, BOX_FACES.copy()
+
+
 def perspective(w, h, fov=np.radians(50.0), near=0.1, far=100.0):
     """Blender's OpenGL perspective projection for a w x h frame (sensor fit AUTO, w >= h)."""
     t = 1.0 / np.tan(fov / 2)

@@ -29,7 +29,7 @@ def test_outline_hits_on_the_inner_half_are_whole():
     w, h = 240, 135
     v, t, mat = motion_bench.scene()
     cam = motion_bench.camera(0)
-    g, _, _ = motion_bench.render(v, t, mat, cam, w, h)
+    g, _ = motion_bench.render(v, t, mat, cam, w, h)
     uv = glint_core.trace(g["position"], g["normal"], motion_bench.projection(w, h), specular=g["specular"],
                           back_position=g["back_position"], **motion_bench.march_options("balanced"))
     vis = uv[..., 2]
