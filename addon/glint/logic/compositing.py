@@ -306,8 +306,10 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("bounced", 0, "use_bounce", 1),
 ]
 # every Translate moves by the region's offset, or by minus it
-for _t, (kind, props, _) in [(n, v) for n, v in GROUP_NODES.items() if v[0] == "translate"]:
-    if props["sign"] > 0:
+for _t, (_kind, _props, _) in GROUP_NODES.items():
+    if _kind != "translate":
+        continue
+    if _props["sign"] > 0:
         GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
     else:
         GROUP_LINKS += [("offset_back_x", 0, _t, 1), ("offset_back_y", 0, _t, 2)]
@@ -539,17 +541,26 @@ def _canvas(values, frame_hw):
     return sizes.pop() if sizes else frame_hw
 
 
+def _region_origin(region_hw, dx: float, dy: float, frame_hw) -> Tuple[int, int]:
+    """The frame's column and row where a region-sized canvas, centred on the
+    frame and translated by (dx, dy) pixels, starts; raises unless it lands on
+    whole pixels inside the frame."""
+    h, w = frame_hw
+    bh, bw = region_hw
+    x0, y0 = dx + (w - bw) / 2.0, dy + (h - bh) / 2.0
+    if x0 != int(x0) or y0 != int(y0) or not (0 <= x0 <= w - bw and 0 <= y0 <= h - bh):
+        raise ValueError(f"a {bw}x{bh} region translated by ({dx}, {dy}) does not land on the frame's pixels")
+    return int(x0), int(y0)
+
+
 def _translated(value, dx: float, dy: float, frame_hw) -> np.ndarray:
     """Blender's Translate of a region-sized canvas, centred on the frame, by
     (dx, dy) pixels: the region's pixels in a frame of zeros."""
     value = np.asarray(value, dtype=np.float32)
-    h, w = frame_hw
     bh, bw = value.shape[:2]
-    x0, y0 = dx + (w - bw) / 2.0, dy + (h - bh) / 2.0
-    if x0 != int(x0) or y0 != int(y0) or not (0 <= x0 <= w - bw and 0 <= y0 <= h - bh):
-        raise ValueError(f"a {bw}x{bh} region translated by ({dx}, {dy}) does not land on the frame's pixels")
-    out = np.zeros((h, w) + value.shape[2:], np.float32)
-    out[int(y0):int(y0) + bh, int(x0):int(x0) + bw] = value
+    x0, y0 = _region_origin((bh, bw), dx, dy, frame_hw)
+    out = np.zeros(tuple(frame_hw) + value.shape[2:], np.float32)
+    out[y0:y0 + bh, x0:x0 + bw] = value
     return out
 
 
@@ -557,15 +568,12 @@ def _region_of(value, dx: float, dy: float, region_hw, frame_hw) -> np.ndarray:
     """A frame-sized canvas moved by minus the region's offset (dx, dy), as a
     region-sized operation reads it (Blender centres the larger canvas on the
     smaller): the frame's pixels under the region."""
-    h, w = frame_hw
-    bh, bw = region_hw
     value = np.asarray(value, dtype=np.float32)
-    if value.shape[:2] != (h, w):
-        value = _as_colour(value, (h, w, 4))
-    x0, y0 = dx + (w - bw) / 2.0, dy + (h - bh) / 2.0
-    if x0 != int(x0) or y0 != int(y0) or not (0 <= x0 <= w - bw and 0 <= y0 <= h - bh):
-        raise ValueError(f"a {bw}x{bh} region at offset ({dx}, {dy}) does not lie on the frame's pixels")
-    return value[int(y0):int(y0) + bh, int(x0):int(x0) + bw]
+    if value.shape[:2] != tuple(frame_hw):
+        value = _as_colour(value, tuple(frame_hw) + (4,))
+    bh, bw = region_hw
+    x0, y0 = _region_origin(region_hw, dx, dy, frame_hw)
+    return value[y0:y0 + bh, x0:x0 + bw]
 
 
 def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
