@@ -6,11 +6,17 @@
 float look_roughness(vec4 s) { return 1.0 - clamp01(finite_f(s.a) ? s.a : 1.0); }
 
 // GGX alpha from the shininess alpha: hardness = shininess alpha * 511,
-// alpha = sqrt(2 / (hardness + 2)); shininess alpha 1 (the 511 clamp) = mirror.
+// alpha = sqrt(2 / (hardness + 2)); shininess alpha 1 (the 511 clamp) = mirror,
+// above 1 the gloss range (hardness past 511).
 float look_ggx_alpha(vec4 s) {
   float r = look_roughness(s);
-  if (!(r > 0.0)) return 0.0;
-  precise float hardness = (1.0 - r) * (HARDNESS_PER_SHININESS * MAX_SHININESS);
+  precise float hardness;
+  if (r > 0.0) {
+    hardness = (1.0 - r) * (HARDNESS_PER_SHININESS * MAX_SHININESS);
+  } else {
+    if (!(s.a > 1.0) || !finite_f(s.a)) return 0.0;
+    hardness = s.a * (HARDNESS_PER_SHININESS * MAX_SHININESS);
+  }
   precise float q = 2.0 / (hardness + 2.0);
   return sqrt(q);
 }

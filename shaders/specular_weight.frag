@@ -20,7 +20,7 @@ layout(location = 0) out vec4 out_color;
 vec2 env_brdf(float n_dot_v, float alpha) {
   int n = textureSize(u_env_brdf, 0).x;
   float scale = float(n - 1);
-  precise float x = clamp01(n_dot_v) * scale;
+  precise float x = sqrt(clamp01(n_dot_v)) * scale;
   precise float y = sqrt(clamp01(alpha)) * scale;
   int x0 = min(int(x), n - 2), y0 = min(int(y), n - 2);
   precise float fx = x - float(x0);

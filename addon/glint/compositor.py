@@ -18,6 +18,7 @@ import numpy as np
 from . import gather
 from .host import data as host_data, engines, nodes as host_nodes
 from .logic import compositing as cg
+from .logic import materials
 from .logic import world as world_logic
 from .state import STATE
 
@@ -208,8 +209,8 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
 def scene_reflectors(scene) -> Tuple[int, bool]:
     """How many of the scene's objects count for Auto's second bounce (a sharp
     or metallic reflective material: ``logic.compositing.counts_for_second_bounce``),
-    and whether a reflective material is rough enough for the blur (its shininess
-    below a mirror's). Read from the materials, not the frame, because the render
+    and whether a reflective material is rough enough for the blur (it has a lobe:
+    every shininess but a mirror's, ``logic.materials.is_glossy``). Read from the materials, not the frame, because the render
     takes the node tree's values before the frame is exported (module docstring of
     handlers); objects hidden from the render are not counted."""
     of_material = {}  # material name -> (counts for the bounce, rough)
@@ -225,7 +226,7 @@ def scene_reflectors(scene) -> Tuple[int, bool]:
             if mat.name not in of_material:
                 spec, _ = gather.material_info(mat)
                 of_material[mat.name] = (cg.counts_for_second_bounce(spec.reflective, spec.alpha, spec.amount),
-                                         spec.reflective and spec.alpha < 1.0)
+                                         spec.reflective and materials.is_glossy(spec.alpha))
             c, g = of_material[mat.name]
             counts = counts or c
             rough = rough or g

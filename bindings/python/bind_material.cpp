@@ -12,7 +12,8 @@ namespace glint::py {
 
 void bind_material(pyb::module_& m) {
   m.def("shininess_to_alpha", &shininess_to_alpha, "shininess"_a,
-        "clamp(shininess / MAX_SHININESS, 0, 1): the specular buffer's alpha (schema()).");
+        "shininess / MAX_SHININESS, 0 below 0: the specular buffer's alpha (schema());\n"
+        "above 1 the gloss range (hardness past 511), +inf a mirror (1).");
   m.def("shininess_from_hardness", &shininess_from_hardness, "hardness"_a,
         "Blender Internal hardness to shininess: hardness / HARDNESS_PER_SHININESS (schema()).");
   m.def(
@@ -29,7 +30,8 @@ void bind_material(pyb::module_& m) {
         return ggx_alpha_of(s);
       }, "shininess_alpha"_a,
       "GGX alpha of a specular-buffer alpha a: sqrt(2 / (h + 2)) at hardness\n"
-      "h = a * HARDNESS_PER_SHININESS * MAX_SHININESS, 0 at a >= 1 (a mirror).");
+      "h = a * HARDNESS_PER_SHININESS * MAX_SHININESS, 0 at a == 1 (a mirror) or\n"
+      "a not finite; above 1 the gloss range.");
   m.def("cone_tan", &cone_tan, "alpha"_a,
         "tan of the reflection cone's half-angle for GGX alpha: 2 a / (1 - a^2), capped at MAX_CONE_TAN.");
 }

@@ -73,7 +73,8 @@ std::vector<float> build_table() {
   for (int j = 0; j < n; ++j) {
     const double r = static_cast<double>(j) / (n - 1);
     for (int i = 0; i < n; ++i) {
-      const double nov = std::fmax(static_cast<double>(i) / (n - 1), kEnvBrdfMinNdotV);
+      const double q = static_cast<double>(i) / (n - 1);
+      const double nov = std::fmax(q * q, kEnvBrdfMinNdotV);
       integrate(nov, r * r, &t[2 * (j * n + i)]);
     }
   }

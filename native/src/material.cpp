@@ -13,7 +13,7 @@ namespace glint {
 float shininess_to_alpha(float shininess) {
   const float a = shininess / kMaxShininess;
   if (!(a > 0.0f)) return 0.0f;
-  return a > 1.0f ? 1.0f : a;
+  return a - a == 0.0f ? a : 1.0f;  // +inf: a mirror, not a finite gloss
 }
 
 Image cone_lod(const Image& uv, const Image& specular) {

@@ -20,13 +20,15 @@ double ms_since(Clock::time_point t0) {
 
 // What the scene needs: how many seen pixels reflect, how many of those are
 // rough, and the bounding box of the rough ones (the only place a blur is read).
+// Rough is what the blur reads: the box blur mixes by roughness_of(), the cone
+// by the lobe's width, which also covers the gloss range (is_glossy()).
 struct SceneNeeds {
   size_t reflective = 0;
   size_t rough = 0;
   int box[4] = {0, 0, 0, 0};  // x0, y0, x1, y1 (half-open) of rough reflective pixels
 };
 
-SceneNeeds survey(const PipelineInputs& in, int threads) {
+SceneNeeds survey(const PipelineInputs& in, bool cone, int threads) {
   SceneNeeds needs;
   std::mutex mu;
   int bx0 = in.specular.width, by0 = in.specular.height, bx1 = 0, by1 = 0;
@@ -37,7 +39,7 @@ SceneNeeds survey(const PipelineInputs& in, int threads) {
       const float* s = in.specular.px(x, y);
       if (!is_reflective(s) || !texel_seen(in.position.px(x, y))) continue;
       ++refl;
-      if (roughness_of(s) > 0.0f) {
+      if (cone ? is_glossy(s) : roughness_of(s) > 0.0f) {
         ++rough;
         rx0 = std::min(rx0, x);
         rx1 = std::max(rx1, x);
@@ -100,7 +102,7 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   const int w = in.position.width, h = in.position.height;
   const char* blur_stage = opt.blur_mode == BlurMode::Cone ? "cone_blur" : "box_blur";
   auto t0 = Clock::now();
-  const SceneNeeds needs = survey(in, opt.threads);
+  const SceneNeeds needs = survey(in, opt.blur_mode == BlurMode::Cone, opt.threads);
   res.timings.push_back({"survey", ms_since(t0), false});
   res.reflective_pixels = needs.reflective;
   res.rough_pixels = needs.rough;

@@ -186,7 +186,7 @@ def test_only_sharp_or_metallic_reflectors_count_for_autos_second_bounce():
         return cg.counts_for_second_bounce(spec.reflective, spec.alpha, spec.amount)
     # Blender's default material: F0 = 0.08 x 0.5 = 0.04, Roughness 0.5 (hardness ~33 < 511)
     assert not counts()
-    assert counts(Roughness=0.1)  # below ~0.25 the shininess is a mirror's
+    assert counts(Roughness=0.1)  # below ~0.25: the gloss range, alpha above 1
     assert counts(Metallic=1.0, **{"Base Color": (0.9, 0.9, 0.9, 1.0)})  # amount 0.9
     assert not counts(Specular=0.0, Roughness=0.1)  # not reflective at all
     assert not cg.counts_for_second_bounce(True, 0.5, 0.49)

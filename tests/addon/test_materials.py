@@ -23,8 +23,10 @@ def test_alpha_of_hardness_1_is_1_over_511():
 
 
 @pytest.mark.parametrize("roughness,hardness", [
-    (0.0, 511.0),
-    (0.2, 511.0),  # alpha 0.04: 2 / 0.0016 - 2 = 1248 -> capped
+    (0.0, float("inf")),  # a mirror
+    (0.01, float("inf")),  # alpha 1e-4, below MIRROR_GGX_ALPHA: a mirror
+    (0.1, 2 / 0.01 ** 2 - 2),  # 19998: the gloss range
+    (0.2, 2 / 0.04 ** 2 - 2),  # 1248: past Blender Internal's 511
     (0.3, 2 / 0.09 ** 2 - 2),  # 244.91...
     (0.5, 30.0),  # alpha 0.25: 2 / 0.0625 - 2
     (0.8, 2 / 0.64 ** 2 - 2),  # 2.8828...
@@ -151,7 +153,9 @@ def test_mix_and_add_shaders():
     assert mix.color == pytest.approx((0.75, 0.75, 0.75))
     assert mix.shininess == 127.75  # only the mirror reflects
     half = m.evaluate_shader({"kind": "mix", "fac": 0.5, "a": mirror, "b": rough})
-    assert half.shininess == pytest.approx((127.75 + 0.25) / 2)  # amount-weighted
+    # amount-weighted GGX widths: the mirror's 0 and hardness 1's sqrt(2 / 3)
+    width = (2 / 3) ** 0.5 / 2
+    assert half.shininess == pytest.approx((2 / width ** 2 - 2) / 4)
     add = m.evaluate_shader({"kind": "add", "a": mirror, "b": mirror})
     assert add.color == pytest.approx((1.0, 1.0, 1.0))  # clamped
 
@@ -164,11 +168,31 @@ def test_row_layout_is_rgb_then_shininess():
 
 def test_roughness_survives_the_round_trip_through_the_core(core):
     """The add-on writes shininess from Blender's roughness; the core reads a GGX
-    alpha back from the specular buffer's alpha. Between the clamps (hardness 1..511,
-    roughness ~0.25..0.90) that alpha must be Blender's own, roughness squared."""
-    for r in [0.26 + k * (0.90 - 0.26) / 40 for k in range(41)]:
+    alpha back from the specular buffer's alpha. Above the hardness-1 clamp
+    (roughness ~0.90) and the mirror (roughness ~0.016) that alpha must be
+    Blender's own, roughness squared: in the book's range (hardness 1..511) and in
+    the gloss range past it alike."""
+    for r in [0.02 + k * (0.90 - 0.02) / 88 for k in range(89)]:
         shininess = m.shininess_from_roughness(r)
         alpha = core.ggx_alpha(core.shininess_to_alpha(shininess))
         assert alpha == pytest.approx(r * r, rel=1e-5), r  # float32 in the core
-    # At or below ~0.25 the 511 clamp makes a mirror, on both sides.
-    assert core.ggx_alpha(core.shininess_to_alpha(m.shininess_from_roughness(0.2))) == 0.0
+        assert m.ggx_alpha_from_shininess(shininess) == pytest.approx(r * r, rel=1e-9), r
+    # Roughness 0.2 is glossy now, not a mirror (issue 22's gloss).
+    assert core.ggx_alpha(core.shininess_to_alpha(m.shininess_from_roughness(0.2))) == pytest.approx(0.04, rel=1e-5)
+    # A mirror is alpha 1 on both sides, and so is the book's hardness 511.
+    assert m.alpha_from_shininess(m.shininess_from_roughness(0.0)) == 1.0
+    assert core.ggx_alpha(1.0) == 0.0 and m.ggx_alpha_from_shininess(127.75) == 0.0
+    # Past 1 the shininess runs on: hardness 1248 for roughness 0.2, so alpha 1248 / 511.
+    assert m.alpha_from_shininess(m.shininess_from_roughness(0.2)) == pytest.approx((2 / 0.04 ** 2 - 2) / 511)
+
+
+def test_the_gloss_range_stays_inside_a_half_float():
+    """The glossiest lobe written as one (just above MIRROR_GGX_ALPHA) must keep
+    the specular alpha a half-float EXR layer can hold (65504)."""
+    r = (m.schema.MIRROR_GGX_ALPHA * 1.0001) ** 0.5
+    assert 1.0 < m.alpha_from_shininess(m.shininess_from_roughness(r)) < 65504
+
+
+def test_glossy_is_every_finite_alpha_but_a_mirrors():
+    assert m.is_glossy(0.0) and m.is_glossy(0.5) and m.is_glossy(1.5)
+    assert not m.is_glossy(1.0) and not m.is_glossy(float("nan")) and not m.is_glossy(float("inf"))

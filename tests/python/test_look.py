@@ -76,9 +76,10 @@ def env_brdf_brute(nov, alpha, nt=2000, nphi=400):
 
 
 def ggx_alpha(shininess_alpha):
-    """docs/addon.md: hardness = clamp(2 / alpha^2 - 2, 1, 511) = 511 * shininess
-    alpha; inverted, with the 511 clamp (shininess alpha 1) read as a mirror."""
-    if shininess_alpha >= 1:
+    """docs/addon.md: hardness = 2 / alpha^2 - 2 = 511 * shininess alpha, past 511
+    in the gloss range; inverted, with shininess alpha 1 (the book's 511) read as a
+    mirror."""
+    if shininess_alpha == 1 or not math.isfinite(shininess_alpha):
         return 0.0
     return math.sqrt(2.0 / (511.0 * max(shininess_alpha, 0.0) + 2.0))
 
@@ -129,7 +130,7 @@ def test_specular_weight_against_the_integral():
     mobile fit is measured beside it, for the choice of a table."""
     novs = np.linspace(0.0, 1.0, 41)
     worst = worst_fit = 0.0
-    for sa in (1.0, 0.999, 0.9, 0.5, 0.2, 0.05, 0.01, 0.0):
+    for sa in (39.1, 2.44, 1.001, 1.0, 0.999, 0.9, 0.5, 0.2, 0.05, 0.01, 0.0):
         alpha = ggx_alpha(sa)
         assert glint_core.ggx_alpha(sa) == pytest.approx(alpha, rel=1e-6)
         w = ortho_weight(novs, sa)[0].astype(np.float64)
@@ -249,13 +250,14 @@ def test_contact_and_smooth_pixels_keep_their_colour():
     assert glint_core.cone_blur(col, uv, spec).tobytes() == col.tobytes()
 
 
+@pytest.mark.parametrize("shininess_alpha", [0.3, 2.44])  # the book's range, the gloss range
 @pytest.mark.parametrize("lod", [0.25, 1.0, 3.5, 6.0])
-def test_cone_lod_is_log2_of_the_footprint(lod):
+def test_cone_lod_is_log2_of_the_footprint(lod, shininess_alpha):
     """cone_lod, the map the add-on's compositor blends its blur levels by, is
     log2(2 L tan) for a ray of L pixels; 0 for a mirror, a miss, a non-reflective
     pixel, or a footprint within one pixel."""
     h, w = 20, 30
-    uv, spec = cone_inputs(h, w, footprint_offset(lod, 0.3), 0.3)
+    uv, spec = cone_inputs(h, w, footprint_offset(lod, shininess_alpha), shininess_alpha)
     got = glint_core.cone_lod(uv, spec)
     assert got.shape == (h, w) and got.dtype == np.float32
     want = max(lod, 0.0) if 2.0 ** lod > 1.0 else 0.0
@@ -363,6 +365,10 @@ def test_over_without_specular_base_weighs_the_base_by_weight_times_visibility()
 def test_skips_what_the_scene_does_not_need():
     gb = floor_scene(alpha=1.0)
     assert run(gb)["stats"]["skipped"] == ["cone_blur"]  # nothing rough
+    assert run(gb, **SEED_LOOK)["stats"]["skipped"] == ["specular_weight", "box_blur"]
+    # The gloss range (alpha above 1) has a lobe for the cone, none for the book's box.
+    gb["specular"][..., 3] = np.where(gb["specular"][..., 3] > 0, 2.44, 0.0)
+    assert run(gb)["stats"]["skipped"] == []
     assert run(gb, **SEED_LOOK)["stats"]["skipped"] == ["specular_weight", "box_blur"]
     gb["specular"][...] = 0  # nothing reflective: nothing runs
     out = run(gb)

@@ -181,7 +181,9 @@ def test_shininess_mapping():
     assert glint_core.shininess_from_hardness(1) == pytest.approx(0.25)
     assert glint_core.shininess_to_alpha(127.75) == pytest.approx(1.0)
     assert glint_core.shininess_to_alpha(127.75 / 2) == pytest.approx(0.5)
-    assert glint_core.shininess_to_alpha(1000.0) == 1.0
+    # past 127.75 the gloss range: hardness 4000 is alpha 4000 / 511, not capped at 1
+    assert glint_core.shininess_to_alpha(1000.0) == pytest.approx(1000.0 / 127.75)
+    assert glint_core.shininess_to_alpha(float("inf")) == 1.0  # a mirror
     assert glint_core.shininess_to_alpha(-3.0) == 0.0
     assert glint_core.shininess_to_alpha(float("nan")) == 0.0
     assert glint_core.MAX_SHININESS == pytest.approx(127.75)

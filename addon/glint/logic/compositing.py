@@ -382,8 +382,8 @@ SECOND_BOUNCE = (
 
 
 # A reflector counts for Auto's second bounce when its own reflection is sharp
-# (shininess at the mirror's clamp, alpha 1) or strong (a specular amount of a
-# metal's order). A rough dielectric (Blender's default material: Roughness 0.5,
+# (alpha 1, a mirror, or above it, the gloss range: roughness below 0.25) or
+# strong (a specular amount of a metal's order). A rough dielectric (Blender's default material: Roughness 0.5,
 # F0 0.04) shows a faint, blurred reflection; the same reflection again inside
 # another mirror is work nobody sees. Measured on look_compare's `default` scene
 # (docs/look.md): counting them ran the bounce and gave error 0.33, not counting

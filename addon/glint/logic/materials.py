@@ -58,7 +58,7 @@ class SpecularSpec:
     """One row of the material table handed to the rasterizer."""
 
     color: RGB  # specular colour, linear, each in [0, 1]
-    shininess: float  # the book's units, 0..127.75
+    shininess: float  # the book's units, 0..127.75, above it the gloss range
 
     @property
     def amount(self) -> float:
@@ -75,7 +75,7 @@ class SpecularSpec:
 
     @property
     def alpha(self) -> float:
-        """The specular buffer's alpha: shininess mapped to [0, 1]."""
+        """The specular buffer's alpha: shininess / 127.75 (above 1: the gloss range)."""
         return alpha_from_shininess(self.shininess)
 
     def row(self) -> Tuple[float, float, float, float]:
@@ -118,29 +118,51 @@ def shininess_from_hardness(hardness: float) -> float:
 
 
 def alpha_from_shininess(shininess: float) -> float:
-    """The specular buffer's alpha: clamp(shininess / 127.75, 0, 1)."""
-    return _clamp(float(shininess) / MAX_SHININESS, 0.0, 1.0)
+    """The specular buffer's alpha: shininess / 127.75, 0 below 0, 1 (a mirror)
+    for +inf; above 1 the gloss range (glint_core.shininess_to_alpha)."""
+    a = float(shininess) / MAX_SHININESS
+    if not a > 0.0:
+        return 0.0
+    return a if math.isfinite(a) else 1.0
 
 
 def hardness_from_roughness(roughness: float) -> float:
-    """Blender roughness -> a Blinn-Phong exponent in Blender Internal's 1..511 range.
+    """Blender roughness -> a Blinn-Phong exponent, at least Blender Internal's 1.
 
     Hardness was the exponent of a Blinn-Phong lobe. The usual equivalence between
     a Blinn-Phong exponent ``n`` and a microfacet width ``alpha`` (Walter et al.
     2007, "Microfacet models for refraction", eq. 30) is ``n = 2 / alpha^2 - 2``,
     and Blender's BSDFs square the user's roughness: ``alpha = roughness^2``.
-    Exponents above 511 (roughness below ~0.25) are all "a mirror" for the blur
-    and clamp to 511; roughness 1 gives 0, clamped to the minimum hardness 1.
+    Roughness 1 gives 0, raised to the minimum hardness 1. Exponents above 511
+    (roughness below ~0.25) are past Blender Internal's range: the gloss range
+    (:func:`shininess_from_roughness`); a lobe narrower than MIRROR_GGX_ALPHA is a
+    mirror, ``inf``.
     """
     r = _clamp(float(roughness), 0.0, 1.0)
     alpha = r * r
-    if alpha * alpha * (MAX_HARDNESS + 2.0) <= 2.0:  # exponent at or above the cap
-        return MAX_HARDNESS
-    return _clamp(2.0 / (alpha * alpha) - 2.0, MIN_HARDNESS, MAX_HARDNESS)
+    if alpha <= schema.MIRROR_GGX_ALPHA:
+        return math.inf
+    return max(2.0 / (alpha * alpha) - 2.0, MIN_HARDNESS)
 
 
 def shininess_from_roughness(roughness: float) -> float:
-    return shininess_from_hardness(hardness_from_roughness(roughness))
+    """Roughness -> shininess. Hardness up to 511 is the book's; past it (roughness
+    below ~0.25) the shininess goes on growing, hardness / 4, so the specular
+    buffer's alpha passes 1 (the gloss range, docs/conventions.md) and the core's
+    cone blurs the reflection as the lobe is wide; a mirror is 127.75 (alpha 1).
+    Exactly 511 lands on the mirror; the next float of roughness below does not."""
+    hardness = hardness_from_roughness(roughness)
+    if math.isinf(hardness):
+        return MAX_SHININESS
+    if hardness > MAX_HARDNESS:
+        return hardness * HARDNESS_TO_SHININESS
+    return shininess_from_hardness(hardness)
+
+
+def is_glossy(alpha: float) -> bool:
+    """Whether the core's cone blurs a pixel with this specular alpha: it has a
+    lobe (glint::is_glossy): every finite alpha but a mirror's 1."""
+    return math.isfinite(alpha) and alpha != 1.0
 
 
 def _luminance(c: RGB) -> float:
@@ -208,14 +230,29 @@ def viewport_specular(desc: Mapping[str, object]) -> SpecularSpec:
     return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.4))))
 
 
+def ggx_alpha_from_shininess(shininess: float) -> float:
+    """The GGX width the core reads from a shininess (glint::ggx_alpha_of, in
+    double precision): 0 for a mirror, sqrt(2 / (hardness + 2)) otherwise."""
+    a = alpha_from_shininess(shininess)
+    if a == 1.0:
+        return 0.0
+    return math.sqrt(2.0 / (a * MAX_HARDNESS + 2.0))
+
+
 def _combine(a: SpecularSpec, wa: float, b: SpecularSpec, wb: float) -> SpecularSpec:
-    """Weighted sum of two lobes; shininess averaged by each lobe's reflected amount."""
+    """Weighted sum of two lobes; their GGX widths averaged by each lobe's
+    reflected amount (in width, not shininess, which runs the other way past a
+    mirror's 127.75 in the gloss range)."""
     color = _clamp_rgb(tuple(a.color[i] * wa + b.color[i] * wb for i in range(3)))
     ka, kb = a.amount * wa, b.amount * wb
     if ka + kb <= 0.0:
         return SpecularSpec(color, 0.0)
-    shininess = (a.shininess * ka + b.shininess * kb) / (ka + kb)
-    return SpecularSpec(color, shininess)
+    if kb <= 0.0 or a.shininess == b.shininess:  # one lobe, kept exactly
+        return SpecularSpec(color, a.shininess)
+    if ka <= 0.0:
+        return SpecularSpec(color, b.shininess)
+    width = (ggx_alpha_from_shininess(a.shininess) * ka + ggx_alpha_from_shininess(b.shininess) * kb) / (ka + kb)
+    return SpecularSpec(color, shininess_from_roughness(math.sqrt(width)))
 
 
 _MAX_DEPTH = 32  # node graphs are DAGs, but a hand-made description could loop

@@ -11,6 +11,8 @@ MAX_SHININESS = 127.75
 HARDNESS_PER_SHININESS = 4.0
 # Blender Internal's smallest hardness
 MIN_HARDNESS = 1.0
+# GGX alpha at or below which a material is written as a mirror (specular alpha 1)
+MIRROR_GGX_ALPHA = 0.00025
 # cap of a GGX reflection cone's tan
 MAX_CONE_TAN = 16.0
 # hiz: pixels past a cell boundary where the next cell is looked up
@@ -42,6 +44,7 @@ CONSTANTS = {
     "MAX_SHININESS": MAX_SHININESS,
     "HARDNESS_PER_SHININESS": HARDNESS_PER_SHININESS,
     "MIN_HARDNESS": MIN_HARDNESS,
+    "MIRROR_GGX_ALPHA": MIRROR_GGX_ALPHA,
     "MAX_CONE_TAN": MAX_CONE_TAN,
     "CELL_NUDGE": CELL_NUDGE,
     "PLANE_TOLERANCE": PLANE_TOLERANCE,

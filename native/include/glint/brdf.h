@@ -12,8 +12,11 @@
 
 namespace glint {
 
-// Nodes per axis. Node (i, j): N.V = max(i / (N - 1), kEnvBrdfMinNdotV),
-// perceptual roughness sqrt(alpha) = j / (N - 1).
+// Nodes per axis. Node (i, j): N.V = max((i / (N - 1))^2, kEnvBrdfMinNdotV),
+// perceptual roughness sqrt(alpha) = j / (N - 1). Both axes are square roots:
+// a glossy lobe (alpha ~0.01) seen at a grazing angle changes A and B within
+// N.V of about 2 alpha, which evenly spaced N.V nodes (1/31 apart) missed by
+// 0.02; sqrt spacing puts the first nodes 0.001 and 0.004 from 0.
 constexpr int kEnvBrdfSize = 32;
 constexpr int kEnvBrdfU = 128;    // grid steps of the polar-angle CDF per node
 constexpr int kEnvBrdfPhi = 16;   // grid steps of the azimuth over [0, pi] per node
@@ -33,7 +36,7 @@ inline void env_brdf_lookup(const float* t, float n_dot_v, float alpha, float* a
   const int n = kEnvBrdfSize;
   const float scale = static_cast<float>(n - 1);
   auto clamp01 = [](float v) { return v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f; };
-  const float x = clamp01(n_dot_v) * scale;
+  const float x = std::sqrt(clamp01(n_dot_v)) * scale;
   const float y = std::sqrt(clamp01(alpha)) * scale;
   const int x0 = std::min(static_cast<int>(x), n - 2), y0 = std::min(static_cast<int>(y), n - 2);
   const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);

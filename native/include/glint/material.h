@@ -24,15 +24,25 @@ inline float roughness_of(const float* spec) {
 }
 // GGX width alpha (Blender's Roughness squared) of a specular-buffer pixel:
 // the inverse of the add-on's mapping (docs/addon.md) shininess alpha =
-// hardness / 511 with hardness = clamp(2 / alpha^2 - 2, 1, 511). The clamp at
-// 511 (every Roughness <= 0.25) reads as a mirror, alpha 0, so that pixels
-// roughness_of() calls smooth are smooth here too. docs/look-core.md.
+// hardness / 511 with hardness = 2 / alpha^2 - 2. Alpha 1 (hardness 511, the
+// book's largest) is a mirror, alpha 0, so that pixels roughness_of() calls
+// smooth are smooth here too. Above 1 is the gloss range (docs/conventions.md):
+// hardness past Blender Internal's 511, which the add-on writes for Principled
+// roughness below 0.25; roughness_of() reads it as smooth (the book's mix has
+// no gloss), the cone as the GGX lobe it is. docs/look-core.md.
 inline float ggx_alpha_of(const float* spec) {
   const float r = roughness_of(spec);
-  if (!(r > 0.0f)) return 0.0f;
-  const float hardness = (1.0f - r) * (kHardnessPerShininess * kMaxShininess);
+  float hardness;
+  if (r > 0.0f) {
+    hardness = (1.0f - r) * (kHardnessPerShininess * kMaxShininess);
+  } else {
+    if (!(spec[3] > 1.0f) || !(spec[3] - spec[3] == 0.0f)) return 0.0f;
+    hardness = spec[3] * (kHardnessPerShininess * kMaxShininess);
+  }
   return std::sqrt(2.0f / (hardness + 2.0f));
 }
+// Whether the cone blurs a pixel's reflection: its lobe has a width.
+inline bool is_glossy(const float* spec) { return ggx_alpha_of(spec) > 0.0f; }
 // tan of the half-angle of a GGX reflection cone: the half-vector cone that
 // holds half of D's projected mass has tan = alpha, the reflected direction
 // turns twice as far: tan(2 atan(alpha)) = 2 alpha / (1 - alpha^2), capped
@@ -70,7 +80,9 @@ inline bool is_reflective(const float* spec) {
 }
 
 // Material specular, the book's mapping: Blender Internal hardness 1..511,
-// shininess = hardness / 4 (511 -> 127.75), alpha = clamp(shininess / 127.75, 0, 1).
+// shininess = hardness / 4 (511 -> 127.75), alpha = shininess / 127.75, 0 for
+// a negative or non-finite shininess. Not capped at 1: a shininess above
+// 127.75 is the gloss range (ggx_alpha_of()).
 inline float shininess_from_hardness(float hardness) { return hardness / kHardnessPerShininess; }
 float shininess_to_alpha(float shininess);
 

@@ -28,6 +28,12 @@ namespace glint {
 constexpr float kMaxShininess = 127.75f;
 constexpr float kHardnessPerShininess = 4.0f;
 constexpr float kMinHardness = 1.0f;
+// The gloss range (docs/conventions.md): alpha above 1 is hardness past 511,
+// for Principled roughness below 0.25. A GGX alpha at or below this is written
+// as a mirror (alpha 1): its cone stays inside one pixel for hits up to 1000
+// pixels away, and the hardness it would need (3.2e7) would put the buffer's
+// alpha (62,600) at the edge of what a half-float EXR holds.
+constexpr float kMirrorGgxAlpha = 2.5e-4f;
 
 // --- The look (docs/look-core.md) -----------------------------------------
 // A GGX cone's tan, 2 alpha / (1 - alpha^2), grows without bound as alpha
@@ -99,6 +105,8 @@ inline constexpr Constant kConstants[] = {
     {"HARDNESS_PER_SHININESS", Type::Float, kHardnessPerShininess, nullptr,
      "Blender Internal hardness per unit of the book's shininess"},
     {"MIN_HARDNESS", Type::Float, kMinHardness, nullptr, "Blender Internal's smallest hardness"},
+    {"MIRROR_GGX_ALPHA", Type::Float, kMirrorGgxAlpha, nullptr,
+     "GGX alpha at or below which a material is written as a mirror (specular alpha 1)"},
     {"MAX_CONE_TAN", Type::Float, kMaxConeTan, nullptr, "cap of a GGX reflection cone's tan"},
     {"CELL_NUDGE", Type::Float, hiz::kCellNudge, nullptr,
      "hiz: pixels past a cell boundary where the next cell is looked up"},
