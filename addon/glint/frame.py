@@ -277,7 +277,7 @@ def publish(frame: FrameState) -> None:
         _fill_images(frame, uv, weight, position, normal, specular)
     with STATE.lock:
         STATE.arrays = {"position": position, "normal": normal, "specular": specular, "uv": uv,
-                        "projection": cam.projection, "view": cam.view, "frame": report.frame}
+                        "weight": weight, "projection": cam.projection, "view": cam.view, "frame": report.frame}
     report.status = "ok"
 
 

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from compositing_reference import bilinear_clamp, blurred_at_lod, gauss_clamp
 from glint_addon_helpers import load_logic
 
 cg = load_logic("compositing")
@@ -37,43 +38,19 @@ def test_links_name_real_nodes_and_sockets():
 
 def test_blur_levels_hold_half_their_energy_in_the_cone_footprint():
     """A 2D Gaussian holds half its energy within r = sigma sqrt(2 ln 2): each
-    level's sigma puts that r at half its lod's footprint 2^lod."""
+    level's sigma puts that r at LEVEL_FOOTPRINT_SHARE (0.5) of half its lod's
+    footprint 2^lod."""
+    assert cg.LEVEL_FOOTPRINT_SHARE == 0.5
     for lod, sigma in cg.BLUR_LEVELS:
-        r = 2.0 ** lod / 2
+        r = 2.0 ** lod / 4
         assert 1 - math.exp(-r * r / (2 * sigma * sigma)) == pytest.approx(0.5, abs=1e-9)
-        kind, props, defaults = cg.GROUP_NODES[f"blur_{cg.BLUR_LEVELS.index((lod, sigma)) + 1}"]
-        assert kind == "blur" and props["sigma"] == pytest.approx(sigma)
+        j = cg.BLUR_LEVELS.index((lod, sigma)) + 1
+        kind, props, defaults = cg.GROUP_NODES[f"blur_{j}"]
+        on_canvas = sigma / cg.COARSE if j > cg.FULL_LEVELS else sigma  # the wide levels blur coarse texels
+        assert kind == "blur" and props["sigma"] == pytest.approx(on_canvas)
 
 
-# -- an independent reference of the composite ---------------------------------
-
-def bilinear_clamp(img, u, v):
-    h, w = img.shape[:2]
-    x = u * w - 0.5
-    y = v * h - 0.5
-    x0 = np.floor(x)
-    y0 = np.floor(y)
-    ax = (x - x0)[..., None]
-    ay = (y - y0)[..., None]
-    xi0 = np.clip(x0, 0, w - 1).astype(int)
-    xi1 = np.clip(x0 + 1, 0, w - 1).astype(int)
-    yi0 = np.clip(y0, 0, h - 1).astype(int)
-    yi1 = np.clip(y0 + 1, 0, h - 1).astype(int)
-    bottom = img[yi0, xi0] * (1 - ax) + img[yi0, xi1] * ax
-    top = img[yi1, xi0] * (1 - ax) + img[yi1, xi1] * ax
-    return bottom * (1 - ay) + top * ay
-
-
-def gauss_clamp(img, sigma):
-    """A separable Gaussian, clamp to edge, cut at 4 sigma (float64)."""
-    r = max(1, int(math.ceil(4 * sigma)))
-    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
-    k /= k.sum()
-    h, w = img.shape[:2]
-    tmp = sum(k[i] * img[np.clip(np.arange(h) + i - r, 0, h - 1)] for i in range(2 * r + 1))
-    out = sum(k[i] * tmp[:, np.clip(np.arange(w) + i - r, 0, w - 1)] for i in range(2 * r + 1))
-    return out.astype(np.float32)
-
+# -- an independent reference of the composite (sampling and blur: compositing_reference.py)
 
 def reference_composite(base, uv, weight, lod, light, colour, bounce=False):
     """out = base + R, R = D at the pixel's lod between Gaussian levels of D,
@@ -87,13 +64,7 @@ def reference_composite(base, uv, weight, lod, light, colour, bounce=False):
         first[..., :3] += D
         C = np.where(vis > 0, bilinear_clamp(first, uv[..., 0], uv[..., 1]) * vis, 0.0)
         D = C[..., :3] * weight[..., :3] - vis * (light[..., :3] * colour[..., :3])
-    levels = [(0.0, D)] + [(lod_j, gauss_clamp(D, sigma)) for lod_j, sigma in cg.BLUR_LEVELS]
-    R = np.array(D)
-    for (l0, b0), (l1, b1) in zip(levels, levels[1:]):
-        inside = (lod > l0) & (lod <= l1)
-        f = ((lod - l0) / (l1 - l0))[..., None]
-        R = np.where(inside[..., None], (1 - f) * b0 + f * b1, R)
-    R = np.where((lod > levels[-1][0])[..., None], levels[-1][1], R)
+    R = blurred_at_lod(D, lod)
     out = base.copy()
     out[..., :3] += R
     return out, R
@@ -141,9 +112,11 @@ def uv_image(uv):
 def images_of(base, position, spec, uv, weight, lod, debug=None):
     w = weight.copy()
     w[..., 3] = lod
+    h, wd = base.shape[:2]
     return {cg.IMAGE_UV: uv_image(uv), cg.IMAGE_WEIGHT: w,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
-            cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec}
+            cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec,
+            **cg.coarse_images(lod, (0, 0, wd, h))}
 
 
 @pytest.mark.parametrize("engine_passes", [True, False])
@@ -204,8 +177,8 @@ def test_second_bounce_runs_where_reflectors_can_meet():
     calls = []
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     images = images_of(base, position, spec, uv, weight, lod)
-    cg.evaluate_group(base, images, lambda i, u: calls.append(1) or np_map_uv(i, u), gauss_clamp)
-    assert len(calls) == 1  # switched off, the second Map UV does not run
+    cg.evaluate_group(base, images, lambda i, u: calls.append(1) or np_map_uv(i, u), gauss_clamp, use_blur=False)
+    assert len(calls) == 1  # switched off, the second Map UV does not run (nor the coarse levels' two)
 
 
 @pytest.mark.parametrize("bounce", [False, True])
@@ -327,23 +300,24 @@ def test_debug_images():
 # -- the region: only the part of the frame that can change is composited ------
 
 def test_image_region_is_the_box_of_hits_and_blurred_pixels_grown_by_the_pad():
-    vis = np.zeros((20, 30), np.float32)
-    lod = np.zeros((20, 30), np.float32)
+    vis = np.zeros((60, 80), np.float32)
+    lod = np.zeros((60, 80), np.float32)
     assert cg.image_region(vis, lod) == (0, 0, 1, 1)  # nothing to do: one pixel, vis 0
-    vis[5, 7] = 0.5
-    vis[9, 12] = 1.0
+    vis[25, 27] = 0.5
+    vis[29, 32] = 1.0
     p = cg.REGION_PAD
-    # rows 5-p..10+p are 9 + 2p, odd in a frame 20 high: one more row, so
+    assert p >= 2 * cg.COARSE  # the coarse levels' clear border (test_a_region_composites_...)
+    # rows 25-p..30+p are 5 + 2p, odd in a frame 60 high: one more row, so
     # that the region centred on the frame sits on whole pixels
-    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 13 + p, 10 + p + 1)
-    lod[15, 20] = 0.25  # a rough pixel takes blurred D from hits around it
-    assert cg.image_region(vis, lod) == (7 - p, 5 - p, 21 + p, 16 + p + 1)
-    lod[15, 20] = 0.0
-    vis[19, 29] = 1.0  # at the frame's far corner an odd count grows towards the origin
-    assert cg.image_region(vis, lod) == (7 - p - 1, 5 - p - 1, 30, 20)
-    vis[19, 29] = 0.0
-    vis[0, 0] = lod[19, 29] = 1.0  # the pad stops at the frame
-    assert cg.image_region(vis, lod) == (0, 0, 30, 20)
+    assert cg.image_region(vis, lod) == (27 - p, 25 - p, 33 + p, 30 + p + 1)
+    lod[35, 40] = 0.25  # a rough pixel takes blurred D from hits around it
+    assert cg.image_region(vis, lod) == (27 - p, 25 - p, 41 + p, 36 + p + 1)
+    lod[35, 40] = 0.0
+    vis[59, 79] = 1.0  # at the frame's far corner an odd count grows towards the origin
+    assert cg.image_region(vis, lod) == (27 - p - 1, 25 - p - 1, 80, 60)
+    vis[59, 79] = 0.0
+    vis[0, 0] = lod[59, 79] = 1.0  # the pad stops at the frame
+    assert cg.image_region(vis, lod) == (0, 0, 80, 60)
 
 
 @pytest.mark.parametrize("region,size", [((3, 2, 23, 12), (64, 36)), ((40, 20, 61, 31), (64, 36)),
@@ -366,11 +340,12 @@ def test_the_offset_puts_the_region_back_where_it_was_cut(region, size):
 
 
 def confined_scene(seed):
-    """scene() with every hit and every rough pixel inside rows 6..14, columns 9..22
-    of a 24 x 32 frame: the region is a third of it."""
-    base, position, spec, uv, seen, weight, lod, light, colour = scene(h=24, w=32, seed=seed)
+    """scene() with every hit and every rough pixel inside rows 17..25, columns 19..32
+    of a 48 x 64 frame: with the pad, the region is a quarter of it, and its
+    blocks of the coarse levels do not start on the frame's."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(h=48, w=64, seed=seed)
     inside = np.zeros(base.shape[:2], bool)
-    inside[6:15, 9:23] = True
+    inside[17:26, 19:33] = True
     uv[~inside] = 0
     lod[~inside] = 0
     return base, position, spec, uv, seen, weight, lod, light, colour
@@ -380,13 +355,16 @@ def confined_scene(seed):
                                                (False, True, False)])
 def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur):
     """Cut to the region and placed back by the offset, the images give the frame
-    the group gives from frame-sized ones, bit for bit; a frame-sized input that
+    the group gives from frame-sized ones, bit for bit (with the blur, to the
+    float rounding of what its levels spread to the region's edge); a frame-sized input that
     met the region untranslated would raise."""
     base, position, spec, uv, seen, weight, lod, light, colour = confined_scene(seed=7)
     full = images_of(base, position, spec, uv, weight, lod)
     region = cg.image_region(uv[..., 2], lod)
-    # rows 6..14 grown by the pad are 13, odd in a frame 24 high: one row more
-    assert region == (9 - cg.REGION_PAD, 6 - cg.REGION_PAD, 23 + cg.REGION_PAD, 15 + cg.REGION_PAD + 1)
+    p = cg.REGION_PAD
+    # rows 17..25 grown by the pad are 9 + 2p, odd in a frame 48 high: one row more
+    assert region == (19 - p, 17 - p, 33 + p, 26 + p + 1)
+    assert region[0] % cg.COARSE and region[1] % cg.COARSE  # blocks on the frame's grid, not the region's
     cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region))
     if world:  # the world path's inputs: a colour (an RGB node, no size) and the weight image
         kw = dict(specular_light=np.array((0.3, 0.35, 0.45, 1.0), np.float32), world_specular=True)
@@ -396,7 +374,10 @@ def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur):
     want = cg.evaluate_group(base, full, np_map_uv, gauss_clamp, **kw)
     got = cg.evaluate_group(base, cut, np_map_uv, gauss_clamp, **kw)
     assert np.abs(want["Image"] - base).max() > 0.05
-    assert np.array_equal(got["Image"], want["Image"])
+    if blur:  # the blur's clamp at the region's edge of what it spread there: 6e-8 at most here
+        assert np.abs(got["Image"] - want["Image"]).max() <= 1e-6
+    else:
+        assert np.array_equal(got["Image"], want["Image"])
 
 
 def test_region_meeting_the_frame_untranslated_is_caught():

@@ -41,12 +41,29 @@ The blur: :data:`BLUR_LEVELS` Gaussian levels of D (Blender's Fast Gaussian,
 whose cost does not grow with its size), blended by lod the way the core's
 cone blur blends its mip levels: a pixel at lod l takes
 mix(..., mix(mix(D, B1, s1), B2, s2) ...), s_j = clamp((l - lod_{j-1}) /
-(lod_j - lod_{j-1}), 0, 1). A level j Gaussian has the sigma of a disc of
-diameter 2^lod_j holding half its energy (the cone's definition, see
-``cone_tan``): sigma = 2^lod / (2 sqrt(2 ln 2)). Blurring D rather than C
+(lod_j - lod_{j-1}), 0, 1). A level j Gaussian holds half its energy within
+a disc of diameter LEVEL_FOOTPRINT_SHARE x 2^lod_j, half the cone's footprint
+(``cone_tan``; why half: at :data:`LEVEL_FOOTPRINT_SHARE`): sigma = 2^lod /
+(4 sqrt(2 ln 2)). Blender's Fast Gaussian blurs with sigma = its size / 2
+(host/nodes.py). Blurring D rather than C
 weights each neighbour by its own W and S, which vary slowly over a rough
 surface. A frame with no rough reflective surface switches the levels off
 (``use_blur``): the compositor then does not run them at all.
+
+The coarse levels: a Fast Gaussian costs the same per pixel whatever its
+sigma, and the wide levels (sigma 3.4, 14 and 54 pixels) hold nothing finer
+than a few pixels. So only the first level (sigma 0.85) blurs the region's
+pixels; the others blur a canvas with one texel per COARSE x COARSE block,
+1/16 of the pixels. Map UV makes it: the coarse image's uv puts each texel at
+its block's centre, and Map UV's filter, which sizes itself by how far the uv
+moves between neighbouring texels, averages the block. The levels are mixed
+there as above, by the mean lod of the block's blurred pixels, and a second
+Map UV reads that mix back at each pixel (the fine image's uv). Since the
+mixing weights rise in order (s_j > 0 only where s_{j-1} = 1), the chain
+mix(mix(mix(D, B1, s1), B2, s2), ...) equals mix(mix(D, B1, s1), Q, s2) with Q
+the coarse mix of B2..B4: exact up to the block's lod standing for its pixels'.
+The blocks lie on the frame's grid, so a region's coarse canvas is part of the
+frame's. Measured in docs/addon.md (*The coarse levels*).
 
 The second bounce: a mirror that reflects another mirror shows that mirror as
 the engine rendered it, without its reflection. Sampling the frame *with* the
@@ -97,9 +114,12 @@ IMAGE_POSITION = "Glint Position"
 IMAGE_NORMAL = "Glint Normal"
 IMAGE_SPECULAR = "Glint Specular"
 IMAGE_OFFSET = "Glint Offset"  # 1x1: where the region's images go in the frame (:func:`region_offset`)
-ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR, IMAGE_OFFSET)
+IMAGE_COARSE = "Glint Coarse"  # the coarse canvas of the wide blur levels (:func:`coarse_images`)
+IMAGE_FINE = "Glint Fine"      # where each region pixel reads the coarse canvas
+ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR, IMAGE_OFFSET,
+              IMAGE_COARSE, IMAGE_FINE)
 # The images cut to the frame's region (the others stay frame-sized).
-REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT)
+REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE)
 # The one image whose zeros make the group pass the frame through (vis = 0:
 # C = 0 and D = 0): what a frame Glint does not handle clears.
 PASS_THROUGH_IMAGE = IMAGE_UV
@@ -160,8 +180,20 @@ GBUFFER_DEBUG_VIEWS = ("POSITION", "NORMAL", "SPECULAR", "UV", "VISIBILITY")
 
 # The blur levels: (lod, sigma in pixels). Every second lod up to 2^8 = 256
 # pixels: the footprint of a roughness 0.5 lobe 240 pixels from its hit.
+# A level's Gaussian holds half its energy within a disc of diameter
+# LEVEL_FOOTPRINT_SHARE x 2^lod. The cone's own half-energy disc is the whole
+# footprint (share 1), but a Gaussian that wide spreads the GGX lobe's narrow
+# core as far as its long tail: against Cycles (bench/look_compare.py, 3.4)
+# share 1 gave error 0.26 on the rough floor and 0.19 on the metal sphere,
+# share 0.5 gave 0.23 and 0.16 (docs/addon.md, *The coarse levels*).
 HALF_ENERGY_SIGMA = 1.0 / (2.0 * math.sqrt(2.0 * math.log(2.0)))
-BLUR_LEVELS = tuple((float(lod), HALF_ENERGY_SIGMA * 2.0 ** lod) for lod in (2, 4, 6, 8))
+LEVEL_FOOTPRINT_SHARE = 0.5
+BLUR_LEVELS = tuple((float(lod), HALF_ENERGY_SIGMA * LEVEL_FOOTPRINT_SHARE * 2.0 ** lod) for lod in (2, 4, 6, 8))
+# The first FULL_LEVELS levels blur the region's pixels; the wider ones a
+# canvas with one texel per COARSE x COARSE block of the frame's pixels
+# ("The coarse levels" above). Level 2's sigma is 3.4 pixels, 0.85 texels.
+FULL_LEVELS = 1
+COARSE = 4
 
 
 def _blur_node(sigma: float):
@@ -246,12 +278,31 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "show_reflection": ("switch", {"on": False}, {}),
     "show_debug": ("switch", {"on": False}, {}),
 }
+# The wide levels blur a coarse copy of D2 (see "The coarse levels" above):
+# Map UV reads D2 at the coarse texels' centres (the coarse image's uv; the
+# filter averages the COARSE x COARSE pixels each covers), the levels blur it
+# at sigma / COARSE and are mixed there by the coarse lod, and one more Map UV
+# (the fine image's uv) brings that mix back to the region's pixels.
+GROUP_NODES.update({
+    "coarse_image": ("image", {"image": IMAGE_COARSE}, {}),
+    "fine_image": ("image", {"image": IMAGE_FINE}, {}),
+    "sep_coarse": _separate(),  # the coarse image's alpha: the coarse texel's lod
+    "to_coarse": ("map_uv", {}, {}),
+    "from_coarse": ("map_uv", {}, {}),
+})
 for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     _lo = BLUR_LEVELS[_j - 2][0] if _j > 1 else 0.0
-    GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma)
+    _coarse = _j > FULL_LEVELS
+    GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma / COARSE if _coarse else _sigma)
     # s_j = clamp(lod / (lod_j - lod_{j-1}) - lod_{j-1} / (lod_j - lod_{j-1}), 0, 1)
-    GROUP_NODES[f"level_{_j}"] = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
-    GROUP_NODES[f"mix_{_j}"] = _mix("MIX")
+    _factor = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
+    if _j <= FULL_LEVELS + 1:  # mixed on the region's pixels
+        GROUP_NODES[f"level_{_j}"] = _factor
+        GROUP_NODES[f"mix_{_j}"] = _mix("MIX")
+    else:  # mixed on the coarse canvas, by the coarse lod
+        GROUP_NODES[f"coarse_level_{_j}"] = _factor
+        GROUP_NODES[f"coarse_mix_{_j}"] = _mix("MIX")
+LAST_MIX = f"mix_{FULL_LEVELS + 1}"  # the blurred D2 on the region's pixels
 
 GROUP_IN = "__input__"
 GROUP_OUT = "__output__"
@@ -314,19 +365,37 @@ for _t, (_kind, _props, _) in GROUP_NODES.items():
     else:
         GROUP_LINKS += [("offset_back_x", 0, _t, 1), ("offset_back_y", 0, _t, 2)]
 # the blur levels work on the region: D2 is 0 on its border (the pad has no hit)
+GROUP_LINKS += [
+    ("coarse_image", 0, "sep_coarse", 0),
+    ("use_bounce", 0, "to_coarse", 0),
+    ("coarse_image", 0, "to_coarse", 1),
+    ("fine_image", 0, "from_coarse", 1),
+]
 for _j in range(1, len(BLUR_LEVELS) + 1):
-    _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
-    GROUP_LINKS += [
-        ("use_bounce", 0, f"blur_{_j}", 0),
-        ("sep_weight", 3, f"level_{_j}", 0),
-        (f"level_{_j}", 0, f"mix_{_j}", 0),
-        (_below, 0, f"mix_{_j}", 1),
-        (f"blur_{_j}", 0, f"mix_{_j}", 2),
-    ]
+    _first_coarse = FULL_LEVELS + 1
+    GROUP_LINKS.append(("to_coarse" if _j >= _first_coarse else "use_bounce", 0, f"blur_{_j}", 0))
+    if _j <= _first_coarse:
+        _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
+        GROUP_LINKS += [
+            ("sep_weight", 3, f"level_{_j}", 0),
+            (f"level_{_j}", 0, f"mix_{_j}", 0),
+            (_below, 0, f"mix_{_j}", 1),
+            ("from_coarse" if _j == _first_coarse else f"blur_{_j}", 0, f"mix_{_j}", 2),
+        ]
+    else:
+        _below = f"blur_{_j - 1}" if _j == _first_coarse + 1 else f"coarse_mix_{_j - 1}"
+        GROUP_LINKS += [
+            ("sep_coarse", 3, f"coarse_level_{_j}", 0),
+            (f"coarse_level_{_j}", 0, f"coarse_mix_{_j}", 0),
+            (_below, 0, f"coarse_mix_{_j}", 1),
+            (f"blur_{_j}", 0, f"coarse_mix_{_j}", 2),
+        ]
+_last = len(BLUR_LEVELS)
+GROUP_LINKS.append((f"coarse_mix_{_last}" if _last > FULL_LEVELS + 1 else f"blur_{_last}", 0, "from_coarse", 0))
 GROUP_LINKS += [
     # the Switch takes input 0 when off: the unblurred D2, levels not run
     ("use_bounce", 0, "use_blur", 0),
-    (f"mix_{len(BLUR_LEVELS)}", 0, "use_blur", 1),
+    (LAST_MIX, 0, "use_blur", 1),
     ("use_blur", 0, "reflection_to_frame", 0),
     (GROUP_IN, 0, "combined", 1),
     ("reflection_to_frame", 0, "combined", 2),
@@ -411,10 +480,13 @@ def use_second_bounce(mode: str, reflective_objects: int) -> bool:
 
 # Pixels kept around the region's hits: Map UV estimates each pixel's uv
 # derivatives from its neighbours' uv (bilinear reads one pixel away), and a hit
-# at the region's edge must see the same neighbours as in the whole frame. With
-# 0 the frame's border hits change (tests/blender/test_region.py fails), 1 is
-# enough there; 2 keeps a pixel in hand.
-REGION_PAD = 2
+# at the region's edge must see the same neighbours as in the whole frame (with
+# 0 the frame's border hits change, tests/blender/test_region.py fails; 1 is
+# enough there). The coarse levels need more: the region's outermost coarse
+# texel must hold no D2, as the whole frame's texels beyond it hold none, and
+# the filter that reads D2 for a texel reaches about a block around its centre.
+# Two blocks of pad leave the outermost texel's block and its neighbour's half clear.
+REGION_PAD = 2 * COARSE
 
 
 def image_region(vis: np.ndarray, lod: np.ndarray, pad: int = REGION_PAD) -> Tuple[int, int, int, int]:
@@ -459,13 +531,55 @@ def region_offset(region: Tuple[int, int, int, int], width: int, height: int) ->
 
 
 def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int]) -> Dict[str, np.ndarray]:
-    """The uv and weight images cut to ``region`` (views, not copies) and the
-    1x1 offset image that places them (:data:`IMAGE_OFFSET`: dx, dy, 0, 1)."""
+    """The uv and weight images cut to ``region`` (views, not copies), the 1x1
+    offset image that places them (:data:`IMAGE_OFFSET`: dx, dy, 0, 1) and the
+    coarse levels' two images (:func:`coarse_images`)."""
     x0, y0, x1, y1 = region
     h, w = np.shape(uv)[:2]
     dx, dy = region_offset(region, w, h)
-    return {IMAGE_UV: uv[y0:y1, x0:x1], IMAGE_WEIGHT: weight[y0:y1, x0:x1],
-            IMAGE_OFFSET: np.array([[[dx, dy, 0.0, 1.0]]], np.float32)}
+    images = {IMAGE_UV: uv[y0:y1, x0:x1], IMAGE_WEIGHT: weight[y0:y1, x0:x1],
+              IMAGE_OFFSET: np.array([[[dx, dy, 0.0, 1.0]]], np.float32)}
+    images.update(coarse_images(weight[y0:y1, x0:x1, 3], region))
+    return images
+
+
+def _blocks(lo: int, hi: int) -> Tuple[int, int]:
+    """The coarse texels [first, last) whose blocks of the frame meet pixels [lo, hi)."""
+    return lo // COARSE, -(-hi // COARSE)
+
+
+def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int]) -> Dict[str, np.ndarray]:
+    """The coarse canvas's images for a region whose pixels have ``lod``:
+
+    * :data:`IMAGE_COARSE`, one texel per COARSE x COARSE block of the frame's
+      pixels that meets the region: (u, v) the block's centre in the region's uv
+      (where Map UV reads D2), 1 (Map UV's vis), and the mean lod of the block's
+      blurred pixels (lod > 0; 0 where it has none), which mixes the levels there;
+    * :data:`IMAGE_FINE`, region-sized: (u, v) of each pixel's centre on the
+      coarse canvas, 1, 1: where the mix of the wide levels is read back.
+
+    Blocks sit on the frame's grid, not the region's, so a region sees the same
+    blocks as the whole frame does."""
+    x0, y0, x1, y1 = region
+    bw, bh = x1 - x0, y1 - y0
+    i0, i1 = _blocks(x0, x1)
+    j0, j1 = _blocks(y0, y1)
+    cw, ch = i1 - i0, j1 - j0
+    coarse = np.ones((ch, cw, 4), np.float32)
+    coarse[..., 0] = ((np.arange(i0, i1) * COARSE + COARSE / 2.0 - x0) / bw)[None, :]
+    coarse[..., 1] = ((np.arange(j0, j1) * COARSE + COARSE / 2.0 - y0) / bh)[:, None]
+    grid = np.zeros((ch * COARSE, cw * COARSE), np.float32)
+    ox, oy = x0 - i0 * COARSE, y0 - j0 * COARSE
+    grid[oy:oy + bh, ox:ox + bw] = np.asarray(lod, np.float32)
+    # block sums as two one-axis sums (rows, then columns): a 1080p region's
+    # 4-axis reduction took twice as long
+    total = np.maximum(grid, 0.0).reshape(ch, COARSE, -1).sum(axis=1).reshape(ch, cw, COARSE).sum(axis=2)
+    count = (grid > 0).reshape(ch, COARSE, -1).sum(axis=1, dtype=np.int32).reshape(ch, cw, COARSE).sum(axis=2)
+    coarse[..., 3] = np.where(count > 0, total / np.maximum(count, 1), 0.0)
+    fine = np.ones((bh, bw, 4), np.float32)
+    fine[..., 0] = (((np.arange(x0, x1) + 0.5) / COARSE - i0) / cw)[None, :]
+    fine[..., 1] = (((np.arange(y0, y1) + 0.5) / COARSE - j0) / ch)[:, None]
+    return {IMAGE_COARSE: coarse, IMAGE_FINE: fine}
 
 
 def debug_image(view: str, position, normal, specular, uv) -> np.ndarray:
