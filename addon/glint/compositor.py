@@ -57,6 +57,10 @@ def ensure_image(name: str, width: int = 4, height: int = 4):
 # Images written since they were last cleared. None: not known yet this session
 # (a saved file may hold packed pixels), so the first clear clears them all.
 _filled = None
+# Per image, what its pixels were made from (``fill_images``'s ``keys``): an
+# image whose key has not changed since it was written, and which no clear has
+# zeroed since, is not written again.
+_filled_from: Dict[str, object] = {}
 
 
 # Per image, a buffer that a region's rows are gathered into for foreach_set
@@ -78,10 +82,19 @@ def _contiguous(name: str, arr: np.ndarray) -> np.ndarray:
     return out
 
 
-def fill_images(images: Dict[str, np.ndarray]) -> None:
-    """Write float32 [h, w, 4] arrays (row 0 at the bottom) into the named images."""
+def fill_images(images: Dict[str, np.ndarray], keys: Optional[Dict[str, object]] = None) -> None:
+    """Write float32 [h, w, 4] arrays (row 0 at the bottom) into the named images.
+    ``keys``: per image, what its array was made from; an image that already
+    holds the array of the same key is left as it is (the coarse levels' fine
+    image depends only on the region: an animation whose region keeps still
+    writes its 33 MB once)."""
     global _filled
+    keys = keys or {}
     for name, arr in images.items():
+        key = keys.get(name)
+        if key is not None and _filled is not None and name in _filled and _filled_from.get(name) == key:
+            continue
+        _filled_from.pop(name, None)
         arr = _contiguous(name, arr)
         h, w = arr.shape[:2]
         img = ensure_image(name, w, h)
@@ -94,6 +107,8 @@ def fill_images(images: Dict[str, np.ndarray]) -> None:
         img.update()
         if _filled is not None:
             _filled.add(name)
+            if key is not None:
+                _filled_from[name] = key
 
 
 def forget_filled() -> None:

@@ -323,4 +323,4 @@ def _fill_images(frame: FrameState, uv, weight, position, normal, specular) -> N
         n4[..., 3] = 1.0
         images[compositing.IMAGE_NORMAL] = n4
         images[compositing.IMAGE_SPECULAR] = specular
-    compositor.fill_images(images)
+    compositor.fill_images(images, keys={compositing.IMAGE_FINE: region})

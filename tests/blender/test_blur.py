@@ -42,6 +42,7 @@ def test_the_compositor_blurs_as_the_formula_says(blender, samples, session_dir)
     err = {name: np.abs(R - want)[m].mean() / np.abs(want[m]).mean() for name, m in (("wide", wide), ("near", near))}
     print(f"\nBlender's blurred reflection against the formula, relative L1: lod > 4 {err['wide']:.3f} "
           f"({int(wide.sum())} pixels), lod <= 2 {err['near']:.3f} ({int(near.sum())} pixels)")
-    # at 480x270 on 3.4: 0.037 and 0.014; the levels at 0.7x their sigma give 0.11,
+    # at 480x270: 0.031 / 0.018 on 3.4, 0.031 / 0.019 on 4.3, 0.003 / 0.000 on 5.2; on
+    # 3.4 the levels at 0.7x their sigma give 0.11,
     # Blender's frame moved by 2 pixels 0.07-0.09
     assert err["wide"] < 0.06 and err["near"] < 0.05
