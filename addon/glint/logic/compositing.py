@@ -193,6 +193,7 @@ BLUR_LEVELS = tuple((float(lod), HALF_ENERGY_SIGMA * LEVEL_FOOTPRINT_SHARE * 2.0
 # canvas with one texel per COARSE x COARSE block of the frame's pixels
 # ("The coarse levels" above). Level 2's sigma is 3.4 pixels, 0.85 texels.
 FULL_LEVELS = 1
+FIRST_COARSE = FULL_LEVELS + 1  # the level whose mix brings the coarse canvas back
 COARSE = 4
 
 
@@ -296,13 +297,13 @@ for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma / COARSE if _coarse else _sigma)
     # s_j = clamp(lod / (lod_j - lod_{j-1}) - lod_{j-1} / (lod_j - lod_{j-1}), 0, 1)
     _factor = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
-    if _j <= FULL_LEVELS + 1:  # mixed on the region's pixels
+    if _j <= FIRST_COARSE:  # mixed on the region's pixels
         GROUP_NODES[f"level_{_j}"] = _factor
         GROUP_NODES[f"mix_{_j}"] = _mix("MIX")
     else:  # mixed on the coarse canvas, by the coarse lod
         GROUP_NODES[f"coarse_level_{_j}"] = _factor
         GROUP_NODES[f"coarse_mix_{_j}"] = _mix("MIX")
-LAST_MIX = f"mix_{FULL_LEVELS + 1}"  # the blurred D2 on the region's pixels
+LAST_MIX = f"mix_{FIRST_COARSE}"  # the blurred D2 on the region's pixels
 
 GROUP_IN = "__input__"
 GROUP_OUT = "__output__"
@@ -372,18 +373,17 @@ GROUP_LINKS += [
     ("fine_image", 0, "from_coarse", 1),
 ]
 for _j in range(1, len(BLUR_LEVELS) + 1):
-    _first_coarse = FULL_LEVELS + 1
-    GROUP_LINKS.append(("to_coarse" if _j >= _first_coarse else "use_bounce", 0, f"blur_{_j}", 0))
-    if _j <= _first_coarse:
+    GROUP_LINKS.append(("to_coarse" if _j >= FIRST_COARSE else "use_bounce", 0, f"blur_{_j}", 0))
+    if _j <= FIRST_COARSE:
         _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
         GROUP_LINKS += [
             ("sep_weight", 3, f"level_{_j}", 0),
             (f"level_{_j}", 0, f"mix_{_j}", 0),
             (_below, 0, f"mix_{_j}", 1),
-            ("from_coarse" if _j == _first_coarse else f"blur_{_j}", 0, f"mix_{_j}", 2),
+            ("from_coarse" if _j == FIRST_COARSE else f"blur_{_j}", 0, f"mix_{_j}", 2),
         ]
     else:
-        _below = f"blur_{_j - 1}" if _j == _first_coarse + 1 else f"coarse_mix_{_j - 1}"
+        _below = f"blur_{_j - 1}" if _j == FIRST_COARSE + 1 else f"coarse_mix_{_j - 1}"
         GROUP_LINKS += [
             ("sep_coarse", 3, f"coarse_level_{_j}", 0),
             (f"coarse_level_{_j}", 0, f"coarse_mix_{_j}", 0),
@@ -391,7 +391,7 @@ for _j in range(1, len(BLUR_LEVELS) + 1):
             (f"blur_{_j}", 0, f"coarse_mix_{_j}", 2),
         ]
 _last = len(BLUR_LEVELS)
-GROUP_LINKS.append((f"coarse_mix_{_last}" if _last > FULL_LEVELS + 1 else f"blur_{_last}", 0, "from_coarse", 0))
+GROUP_LINKS.append((f"coarse_mix_{_last}" if _last > FIRST_COARSE else f"blur_{_last}", 0, "from_coarse", 0))
 GROUP_LINKS += [
     # the Switch takes input 0 when off: the unblurred D2, levels not run
     ("use_bounce", 0, "use_blur", 0),
