@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "glint/schema.h"
+
 namespace glint {
 namespace {
 
@@ -12,6 +14,23 @@ namespace {
 double smith_lambda(double c, double a2) {
   const double t2 = (1.0 - c * c) / (c * c);
   return 0.5 * (-1.0 + std::sqrt(1.0 + a2 * t2));
+}
+
+// The exact (unpolarized) Fresnel reflectance of a dielectric of index n at a
+// cosine c to the normal; total internal reflection cannot happen for n > 1.
+double fresnel_dielectric(double c, double n) {
+  const double g = std::sqrt(n * n - 1.0 + c * c);
+  const double a = (g - c) / (g + c);
+  const double b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+  return 0.5 * a * a * (1.0 + b * b);
+}
+
+// Fh: that reflectance rescaled to 0 head on and 1 at grazing, the part of
+// F = F0 + (1 - F0) Fh that the table's B carries (schema.h, kFresnelShapeIor).
+double fresnel_shape(double c) {
+  const double n = kFresnelShapeIor;
+  const double f0 = (n - 1.0) * (n - 1.0) / ((n + 1.0) * (n + 1.0));
+  return (fresnel_dielectric(c, n) - f0) / (1.0 - f0);
 }
 
 // The integrals of one node over GGX half-vectors, in the variables that
@@ -54,8 +73,7 @@ void integrate(double nov, double alpha, float* out) {
       if (!(lz > 0.0) || !(voh > 0.0)) continue;
       const double g2 = 1.0 / (1.0 + lambda_v + smith_lambda(lz, a2));
       const double gv = g2 * voh / (hz * nov);
-      const double m = 1.0 - voh, m2 = m * m;
-      const double fc = m2 * m2 * m;
+      const double fc = fresnel_shape(voh);
       ra += (1.0 - fc) * gv;
       rb += fc * gv;
     }

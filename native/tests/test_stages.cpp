@@ -221,8 +221,9 @@ TEST(ParallelRows, EveryRowRunsOnceWhenThreadsCannotBeStarted) {
 }
 
 // The physical weight of a mirror (shininess 1) seen head on is its F0
-// (Schlick at N.V = 1: A = 1, B = 0), and at N.V -> 0 it tends to 1 (B = 1).
-TEST(SpecularWeight, MirrorIsSchlickAtBothEnds) {
+// (the Fresnel rim is 0 at N.V = 1: A = 1, B = 0), and at N.V -> 0 it tends to
+// 1 (B = 1).
+TEST(SpecularWeight, MirrorIsF0HeadOnAndOneAtGrazing) {
   const Mat4 proj = orthographic(2, 2, 0.1, 100);
   Image pos(2, 1), nrm(2, 1), spec(2, 1);
   for (int x = 0; x < 2; ++x) {

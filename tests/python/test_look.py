@@ -19,6 +19,9 @@ import pytest
 
 import analytic as A
 import glint_core
+from glint_tables import addon_schema
+
+SCHEMA = addon_schema()
 
 DATA = Path(__file__).resolve().parent / "data"
 SEED_LOOK = dict(weighting="seed", blur="box")
@@ -32,9 +35,22 @@ def smith_lambda(c, a2):
     return 0.5 * (-1.0 + np.sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)))
 
 
+def fresnel_rim(c):
+    """Fh of docs/look-core.md: a dielectric's reflectance at cosine c (the mean
+    of the s and p Fresnel equations, through Snell's law) rescaled to 0 head on
+    and 1 at grazing, for the index schema FRESNEL_SHAPE_IOR."""
+    n = SCHEMA.FRESNEL_SHAPE_IOR
+    c = np.clip(np.asarray(c, float), 0.0, 1.0)
+    cos_t = np.sqrt(1.0 - (1.0 - c * c) / (n * n))
+    rs = (c - n * cos_t) / (c + n * cos_t)
+    rp = (n * c - cos_t) / (n * c + cos_t)
+    f0 = ((n - 1) / (n + 1)) ** 2
+    return (0.5 * (rs * rs + rp * rp) - f0) / (1.0 - f0)
+
+
 def env_brdf_reference(nov, alpha, nu=2048, nphi=256):
-    """A = int (1 - Fc) f cos dl, B = int Fc f cos dl for GGX + height-correlated
-    Smith, Fc = (1 - V.H)^5, over half-vectors in the variables where D (N.H) is
+    """A = int (1 - Fh) f cos dl, B = int Fh f cos dl for GGX + height-correlated
+    Smith, Fh = fresnel_rim(V.H), over half-vectors in the variables where D (N.H) is
     uniform (u = CDF of the polar angle, phi), u = 1 - (1 - s)^3 against the
     1 / N.H growth near u = 1; phi over the full circle."""
     a2 = alpha * alpha
@@ -51,7 +67,7 @@ def env_brdf_reference(nov, alpha, nu=2048, nphi=256):
     ok = (lz > 0) & (voh > 0)
     g2 = 1.0 / (1.0 + smith_lambda(nov, a2) + smith_lambda(np.where(ok, lz, 1.0), a2))
     gv = np.where(ok, g2 * voh / (ct * nov), 0.0) * jac[:, None]
-    fc = (1.0 - np.clip(voh, 0, 1)) ** 5
+    fc = fresnel_rim(voh)
     return ((1.0 - fc) * gv).mean(), (fc * gv).mean()
 
 
@@ -71,7 +87,7 @@ def env_brdf_brute(nov, alpha, nt=2000, nphi=400):
     d = a2 / (np.pi * (hz * hz * (a2 - 1) + 1) ** 2)
     g2 = 1 / (1 + smith_lambda(nov, a2) + smith_lambda(lz, a2))
     f = d * g2 / (4 * lz * nov) * lz * np.sin(t) * (np.pi / 2 / nt) * (2 * np.pi / nphi)
-    fc = (1 - voh) ** 5
+    fc = fresnel_rim(voh)
     return ((1 - fc) * f).sum(), (fc * f).sum()
 
 
@@ -91,11 +107,18 @@ def test_reference_agrees_with_the_hemisphere_integral(nov, alpha):
     assert abs(a - ba) < 2e-4 and abs(b - bb) < 2e-4, (a, ba, b, bb)
 
 
-def test_reference_of_a_mirror_is_schlick():
+def test_reference_of_a_mirror_is_the_fresnel_equations():
+    """A mirror reflects F0 + (1 - F0) Fh(N.V); at IOR 1.5 a dielectric (F0 0.04)
+    reflects 0.0892 at 60 degrees and 0.3877 at 80 (Fresnel's equations by hand),
+    where Schlick's approximation gives 0.0700 and 0.4099."""
     for nov in (0.05, 0.3, 1.0):
         a, b = env_brdf_reference(nov, 0.0, nu=2048, nphi=8)
-        fc = (1 - nov) ** 5
+        fc = fresnel_rim(nov)
         assert a == pytest.approx(1 - fc, abs=1e-6) and b == pytest.approx(fc, abs=1e-6)
+    assert SCHEMA.FRESNEL_SHAPE_IOR == 1.5
+    for deg, f in ((60, 0.0892), (80, 0.3877), (0, 0.04), (90, 1.0)):
+        a, b = env_brdf_reference(math.cos(math.radians(deg)) or 1e-12, 0.0, nu=64, nphi=8)
+        assert 0.04 * a + b == pytest.approx(f, abs=2e-4), deg
 
 
 def ortho_weight(nov, shininess_alpha, f0=(1.0, 0.0, 0.5)):

@@ -15,6 +15,8 @@ MIN_HARDNESS = 1.0
 MIRROR_GGX_ALPHA = 0.00025
 # cap of a GGX reflection cone's tan
 MAX_CONE_TAN = 16.0
+# index of refraction whose exact dielectric Fresnel shapes the specular weight's rim
+FRESNEL_SHAPE_IOR = 1.5
 # hiz: pixels past a cell boundary where the next cell is looked up
 CELL_NUDGE = 0.015625
 # hiz: share of the view distance a ray must be behind a texel's plane to cross it
@@ -46,6 +48,7 @@ CONSTANTS = {
     "MIN_HARDNESS": MIN_HARDNESS,
     "MIRROR_GGX_ALPHA": MIRROR_GGX_ALPHA,
     "MAX_CONE_TAN": MAX_CONE_TAN,
+    "FRESNEL_SHAPE_IOR": FRESNEL_SHAPE_IOR,
     "CELL_NUDGE": CELL_NUDGE,
     "PLANE_TOLERANCE": PLANE_TOLERANCE,
     "BEHIND_SLACK": BEHIND_SLACK,

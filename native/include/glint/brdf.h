@@ -1,6 +1,7 @@
 // The split-sum environment BRDF (Karis 2013, "Real Shading in Unreal Engine
 // 4"): the specular lobe integrated against a uniform environment is
-// F0 * A + B, with A and B functions of N.V and roughness only. Glint
+// F0 * A + B, with A and B functions of N.V and roughness only (the Fresnel
+// term's shape is a dielectric's, schema.h kFresnelShapeIor). Glint
 // tabulates them once per process, integrating the GGX lobe with the
 // height-correlated Smith masking-shadowing term over a grid in the
 // importance-sampling variables; both backends read the same table with the
