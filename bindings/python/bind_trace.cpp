@@ -197,7 +197,8 @@ void bind_trace(pyb::module_& m) {
         "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
         "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, 1) from trace(), the uv\n"
         "of misses within 2 pixels of a hit continued from the hits; 'weight': float32 [H, W, 4], rgb\n"
-        "specular_weight(), a cone_lod(); 'reflective_pixels': pixels traced; 'any_rough': some lod > 0}.\n"
+        "specular_weight(), a cone_lod() continued to the misses around blurred hits (continue_lod());\n"
+        "'reflective_pixels': pixels traced; 'any_rough': some lod > 0}.\n"
         "Trace keywords as trace(); nothing is traced when no pixel reflects.");
   m.def(
       "continue_missing_uv",
@@ -214,6 +215,28 @@ void bind_trace(pyb::module_& m) {
       "A copy of uv (u, v, vis, _) where `rings` rings of misses (vis <= 0) around the hits take\n"
       "the mean uv of their hit (or earlier-ring) 3x3 neighbours; vis and the 4th channel unchanged.\n"
       "What composite_layers() does to its uv image.");
+  m.def(
+      "continue_lod",
+      [](const pyb::handle& weight, const pyb::handle& uv, const pyb::handle& specular,
+         const pyb::handle& position) {
+        Image w = image_from_array(weight, "weight", 0.0f, 4);
+        const Image u = image_from_array(uv, "uv", 0.0f, 4);
+        const Image s = image_from_array(specular, "specular", 0.0f, 4);
+        const Image p = image_from_array(position, "position", 1.0f, 4);
+        require_same_size(w, "weight", u, "uv");
+        require_same_size(w, "weight", s, "specular");
+        require_same_size(w, "weight", p, "position");
+        {
+          pyb::gil_scoped_release release;
+          continue_lod_into_misses(w, u, s, p);
+        }
+        return array_from_image(std::move(w));
+      },
+      "weight"_a, "uv"_a, "specular"_a, "position"_a,
+      "A copy of weight (rgb, lod) where each seen, reflective miss (uv's vis <= 0) takes the lod\n"
+      "of its nearest hit (3x3 chamfer distance) when within half that hit's footprint,\n"
+      "2^(lod - 1) pixels (x 1.0824, the chamfer's largest overstatement): a glossy reflection\n"
+      "blurs outward past its outline too. What composite_layers() does to its weight's lod.");
   m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");
   m.def("march_details", &py_march_details,
         "{name: {description, options: {keyword: meaning}, needs_mesh, uses_back_position, gl}}.");

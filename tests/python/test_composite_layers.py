@@ -62,6 +62,80 @@ def test_negative_rings_are_refused():
         glint_core.continue_missing_uv(np.zeros((2, 2, 4), np.float32), rings=-1)
 
 
+def continued_lod_reference(weight, uv, spec, pos):
+    """continue_lod's rule with the true (Euclidean) distance, by brute force:
+    ({pixel: lod} of the misses whose answer is certain, the set of misses the
+    chamfer distance may settle either way: near a tie between hits of
+    different lods, or past the reach by at most its 8% slack)."""
+    hit = uv[..., 2] > 0
+    hits, lods = np.argwhere(hit), weight[..., 3][hit]
+    sure, either = {}, set()
+    reflective = (pos[..., 3] > 0) & (spec[..., :3].mean(-1) > 0)
+    for y, x in np.argwhere(~hit & reflective):
+        d = np.hypot(hits[:, 0] - y, hits[:, 1] - x)
+        k = int(np.argmin(d))
+        rivals = d[lods != lods[k]]
+        if rivals.size and rivals.min() - d[k] < 1.5:
+            either.add((y, x))
+            continue
+        radius = 2.0 ** (lods[k] - 1) if lods[k] > 0 else -1.0
+        if d[k] <= radius:
+            sure[(y, x)] = lods[k]
+        elif d[k] <= radius * 1.0824:
+            either.add((y, x))
+        else:
+            sure[(y, x)] = 0.0
+    return sure, either
+
+
+def test_misses_take_the_nearest_blurred_hits_lod():
+    """Two blocks of hits (lod 3: reach 4 px; lod 4.5: reach 11 px) on a
+    reflective frame with a column that does not reflect and an unseen pixel:
+    misses within reach take the nearest block's lod, those beyond keep 0, and
+    hits, non-reflective and unseen pixels keep theirs."""
+    h, w = 40, 64
+    pos = np.zeros((h, w, 4), np.float32)
+    pos[..., 2], pos[..., 3] = -5.0, 1.0
+    pos[20, 30, 3] = 0.0  # unseen
+    spec = np.zeros((h, w, 4), np.float32)
+    spec[..., :3], spec[..., 3] = 0.04, 0.5
+    spec[:, 50, :3] = 0.0  # does not reflect
+    uv = np.zeros((h, w, 4), np.float32)
+    weight = np.zeros((h, w, 4), np.float32)
+    weight[..., :3] = 0.1
+    uv[8:16, 6:14, 2] = 1.0
+    weight[8:16, 6:14, 3] = 3.0
+    uv[22:30, 36:44, 2] = 1.0
+    weight[22:30, 36:44, 3] = 4.5
+    weight[25, 40, 3] = 0.0  # one sharp hit inside the block stays sharp
+    got = glint_core.continue_lod(weight, uv, spec, pos)
+    assert np.array_equal(got[..., :3], weight[..., :3])
+    hit = uv[..., 2] > 0
+    assert np.array_equal(got[..., 3][hit], weight[..., 3][hit])
+    assert got[20, 30, 3] == 0.0 and not got[:, 50, 3].any()
+    sure, either = continued_lod_reference(weight, uv, spec, pos)
+    continued = [p for p, lod in sure.items() if lod > 0]
+    assert len(continued) > 300 and len(either) < len(continued) / 2
+    for (y, x), lod in sure.items():
+        assert got[y, x, 3] == lod, (y, x, got[y, x, 3], lod)
+    assert got[16 + 3, 10, 3] == 3.0 and got[16 + 6, 10, 3] == 0.0  # reach 4 below block 1
+    assert got[26, 44 + 10, 3] == 4.5 and got[26, 44 + 13, 3] == 0.0
+
+
+def test_nothing_to_continue_without_a_blurred_hit():
+    h, w = 12, 16
+    pos = np.zeros((h, w, 4), np.float32)
+    pos[..., 3] = 1.0
+    spec = np.full((h, w, 4), 0.5, np.float32)
+    uv = np.zeros((h, w, 4), np.float32)
+    uv[4:6, 4:6, 2] = 1.0
+    weight = np.zeros((h, w, 4), np.float32)  # a mirror's hits: lod 0
+    assert np.array_equal(glint_core.continue_lod(weight, uv, spec, pos), weight)
+    assert np.array_equal(glint_core.continue_lod(weight, np.zeros_like(uv), spec, pos), weight)
+    with pytest.raises(ValueError, match="uv"):
+        glint_core.continue_lod(weight, uv[:5], spec, pos)
+
+
 @pytest.fixture(scope="module")
 def rough_floor():
     gb = A.render(A.mirror_floor_scene(), 160, 120)
@@ -85,7 +159,9 @@ def test_layers_are_the_separate_calls_in_one(rough_floor, backend, request):
     weight = glint_core.specular_weight(gb["position"], gb["normal"], spec, proj, backend=backend)
     assert np.array_equal(layers["weight"][..., :3], weight[..., :3])
     lod = glint_core.cone_lod(uv, spec)
-    assert np.array_equal(layers["weight"][..., 3], lod)
+    hits_lod = np.concatenate([weight[..., :3], lod[..., None]], axis=-1)
+    assert np.array_equal(layers["weight"][..., 3], glint_core.continue_lod(hits_lod, uv, spec, gb["position"])[..., 3])
+    assert (layers["weight"][..., 3] > lod).any()
     seen = gb["position"][..., 3] > 0
     assert layers["reflective_pixels"] == int((seen & (spec[..., :3].mean(-1) > 0)).sum()) > 0
     assert layers["any_rough"] == bool((lod > 0).any()) is True

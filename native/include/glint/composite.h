@@ -15,7 +15,8 @@ struct CompositeLayers {
   // from those hits (continue_missing_uv), alpha 1.
   Image uv;
   // rgb: the split-sum weight (Backend::specular_weight), a: the cone blur's
-  // level (cone_lod_at), 0 for mirrors, misses and pixels that do not reflect.
+  // level (cone_lod_at) at hits, continued to the misses around them
+  // (continue_lod_into_misses); 0 for mirrors and pixels that do not reflect.
   Image weight;
   // Pixels seen with a positive specular amount: what the trace traced.
   uint64_t reflective_pixels = 0;
@@ -30,6 +31,17 @@ struct CompositeLayers {
 // jump from a hit's uv to a miss's (0, 0) and filter a hit over half the
 // frame. Sums in the order dy, dx = -1..1, in float.
 void continue_missing_uv(Image& uv, int rings, int threads = 0);
+
+// A glossy reflection is blurred on both sides of its outline, but a miss
+// (vis 0) has no cone of its own, so a blur gathered at each pixel's own lod
+// would spread a reflection only inward. Each seen, reflective miss takes the
+// lod of the hit nearest to it (3x3 chamfer distance) when it lies within
+// half that hit's footprint, 2^(lod - 1) pixels (times kChamferSlack, the
+// most the chamfer distance overstates a Euclidean one). Hits, pixels that
+// do not reflect and misses farther away keep their lod. `weight`'s alpha is
+// the lod; vis is uv's third channel.
+constexpr float kChamferSlack = 1.0824f;
+void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position);
 
 // Trace on `backend` (specular given: only reflective pixels are traced),
 // then the weight on the same backend and the lod. No trace, weight or lod
