@@ -26,8 +26,11 @@ a checkout after building:
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
       [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
       [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor,default] \\
-      [--cycles-cache DIR]
+      [--cycles-cache DIR] [--arrays DIR]
 
+--arrays DIR writes each scene's linear frames, differences, pixel masks and Glint's
+last G-buffer and layers (uv, weight) to DIR/<scene>.npz, for finding where an error
+comes from.
 --cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
 scene, size, samples, Blender and the code that makes the frames are the same: Cycles is
 most of a run's time and does not depend on Glint, so comparing Glint's changes needs it
@@ -76,12 +79,12 @@ def _args():
     return kit.script_options(
         {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
          "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
-         "scenes": list(SCENES), "cycles-cache": ""},
+         "scenes": list(SCENES), "cycles-cache": "", "arrays": ""},
         {"size": _at_least(kit.frame_size, 8, "size"), "cycles-samples": _at_least(int, 2, "cycles-samples"),
          "eevee-samples": _at_least(int, 2, "eevee-samples"), "rounds": _at_least(int, 1, "rounds"),
          "threshold": float, "out": os.path.abspath, "addon": os.path.abspath,
          "scenes": kit.names_among(SCENES, "scenes"),
-         "cycles-cache": os.path.abspath})
+         "cycles-cache": os.path.abspath, "arrays": os.path.abspath})
 
 
 _register_addon = kit.register_addon
@@ -453,6 +456,14 @@ def run_scene(name, opts, state, tmp):
     mask[on] = (0.3, 0.3, 0.3)
     mask[reflecting] = (1.0, 1.0, 1.0)
     write_png(os.path.join(opts["out"], f"{name}_pixels.png"), mask)
+    if opts["arrays"]:  # for locating an error: the linear frames, differences and masks
+        os.makedirs(opts["arrays"], exist_ok=True)
+        np.savez_compressed(os.path.join(opts["arrays"], f"{name}.npz"), reflecting=reflecting, on=on,
+                            cycles_frame=cycles_frame, **{f"{m}_frame": frames[m] for m in modes},
+                            **{f"{m}_diff": diffs[m] for m in METHODS},
+                            **{f"glint_{k}": np.asarray(state.arrays[k]) for k in ("uv", "weight", "position",
+                                                                                  "normal", "specular")
+                               if k in state.arrays})
     info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
                 noise=noise, cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
     return rows, info
