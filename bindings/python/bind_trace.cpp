@@ -236,7 +236,8 @@ void bind_trace(pyb::module_& m) {
       "A copy of weight (rgb, lod) where each seen, reflective miss (uv's vis <= 0) takes the lod\n"
       "of its nearest hit (3x3 chamfer distance) when within half that hit's footprint,\n"
       "2^(lod - 1) pixels (x 1.0824, the chamfer's largest overstatement): a glossy reflection\n"
-      "blurs outward past its outline too. What composite_layers() does to its weight's lod.");
+      "blurs outward past its outline too; other misses within reach of a hit's footprint get 0.\n"
+      "What composite_layers() does to its weight's lod.");
   m.def("marches", &py_marches, "{name: one-line description} of every march trace() accepts.");
   m.def("march_details", &py_march_details,
         "{name: {description, options: {keyword: meaning}, needs_mesh, uses_back_position, gl}}.");

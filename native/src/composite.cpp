@@ -84,13 +84,14 @@ void continue_missing_uv(Image& uv, int rings, int threads) {
 
 void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position) {
   const int w = uv.width, h = uv.height;
+  auto hit = [&](int x, int y) { return uv.px(x, y)[2] > 0.0f; };
   // Only the box the hits' footprints can reach is walked: a frame's misses
   // far from any blurred hit cost nothing.
   int x0 = w, y0 = h, x1 = -1, y1 = -1;
   float top = 0.0f;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      if (!(uv.px(x, y)[2] > 0.0f)) continue;
+      if (!hit(x, y)) continue;
       x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
       top = std::max(top, weight.px(x, y)[3]);
     }
@@ -99,36 +100,45 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
   x0 = std::max(0, x0 - reach), y0 = std::max(0, y0 - reach);
   x1 = std::min(w - 1, x1 + reach), y1 = std::min(h - 1, y1 + reach);
   const int bw = x1 - x0 + 1, bh = y1 - y0 + 1;
-  const float inf = std::numeric_limits<float>::infinity();
-  std::vector<float, PixelAllocator<float>> dist(static_cast<size_t>(bw) * bh, inf), lod(dist.size(), 0.0f);
+  // The distance to the nearest hit; the lod that hit has travels in the
+  // weight's own alpha (a miss's is overwritten), so the walk needs one float
+  // a pixel of the box beside the images (130 MB at 8K, not 260).
+  std::vector<float, PixelAllocator<float>> dist(static_cast<size_t>(bw) * bh);
   auto at = [&](int x, int y) { return static_cast<size_t>(y - y0) * bw + (x - x0); };
+  const float inf = std::numeric_limits<float>::infinity();
   for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x)
-      if (uv.px(x, y)[2] > 0.0f) dist[at(x, y)] = 0.0f, lod[at(x, y)] = weight.px(x, y)[3];
+    for (int x = x0; x <= x1; ++x) {
+      const bool h0 = hit(x, y);
+      dist[at(x, y)] = h0 ? 0.0f : inf;
+      if (!h0) weight.px(x, y)[3] = 0.0f;
+    }
   // Two raster passes of the 3x3 chamfer distance (steps 1 and sqrt 2), each
   // pixel keeping the lod of the hit it is nearest to.
   const float diag = 1.41421356f;
-  auto relax = [&](size_t i, int nx, int ny, float step) {
+  auto relax = [&](int x, int y, int nx, int ny, float step) {
     if (nx < x0 || nx > x1 || ny < y0 || ny > y1) return;
-    const size_t j = at(nx, ny);
-    if (dist[j] + step < dist[i]) dist[i] = dist[j] + step, lod[i] = lod[j];
+    const size_t i = at(x, y), j = at(nx, ny);
+    if (dist[j] + step < dist[i]) dist[i] = dist[j] + step, weight.px(x, y)[3] = weight.px(nx, ny)[3];
   };
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
-      const size_t i = at(x, y);
-      relax(i, x - 1, y, 1.0f), relax(i, x - 1, y - 1, diag), relax(i, x, y - 1, 1.0f), relax(i, x + 1, y - 1, diag);
+      if (dist[at(x, y)] == 0.0f) continue;  // a hit: nothing is nearer
+      relax(x, y, x - 1, y, 1.0f), relax(x, y, x - 1, y - 1, diag);
+      relax(x, y, x, y - 1, 1.0f), relax(x, y, x + 1, y - 1, diag);
     }
   for (int y = y1; y >= y0; --y)
     for (int x = x1; x >= x0; --x) {
-      const size_t i = at(x, y);
-      relax(i, x + 1, y, 1.0f), relax(i, x + 1, y + 1, diag), relax(i, x, y + 1, 1.0f), relax(i, x - 1, y + 1, diag);
+      if (dist[at(x, y)] == 0.0f) continue;
+      relax(x, y, x + 1, y, 1.0f), relax(x, y, x + 1, y + 1, diag);
+      relax(x, y, x, y + 1, 1.0f), relax(x, y, x - 1, y + 1, diag);
     }
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
-      const size_t i = at(x, y);
-      if (uv.px(x, y)[2] > 0.0f || !(lod[i] > 0.0f) || !(dist[i] <= std::exp2(lod[i] - 1.0f) * kChamferSlack)) continue;
-      if (!texel_seen(position.px(x, y)) || !is_reflective(specular.px(x, y))) continue;
-      weight.px(x, y)[3] = lod[i];
+      if (hit(x, y)) continue;
+      float& lod = weight.px(x, y)[3];
+      const bool keep = lod > 0.0f && dist[at(x, y)] <= std::exp2(lod - 1.0f) * kChamferSlack &&
+                        texel_seen(position.px(x, y)) && is_reflective(specular.px(x, y));
+      if (!keep) lod = 0.0f;
     }
 }
 

@@ -37,9 +37,10 @@ void continue_missing_uv(Image& uv, int rings, int threads = 0);
 // would spread a reflection only inward. Each seen, reflective miss takes the
 // lod of the hit nearest to it (3x3 chamfer distance) when it lies within
 // half that hit's footprint, 2^(lod - 1) pixels (times kChamferSlack, the
-// most the chamfer distance overstates a Euclidean one). Hits, pixels that
-// do not reflect and misses farther away keep their lod. `weight`'s alpha is
-// the lod; vis is uv's third channel.
+// most the chamfer distance overstates a Euclidean one). Hits keep their
+// lod; the other pixels that footprints can reach get 0 when they are farther,
+// unseen or do not reflect. `weight`'s alpha is the lod; vis is uv's third
+// channel.
 constexpr float kChamferSlack = 1.0824f;
 void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position);
 
