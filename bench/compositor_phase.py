@@ -8,7 +8,10 @@ render's progress callbacks: the compositor reports every tile, Eevee once per
 sample, and with one sample the longest gap between two callbacks is Eevee's
 render. Usage, from a checkout after building:
 
-  blender -b --factory-startup -noaudio --python bench/compositor_phase.py -- [--size 1920x1080] [--rounds 5]
+  blender -b --factory-startup -noaudio --python bench/compositor_phase.py -- [--size 1920x1080] [--rounds 5] \
+      [--scene matte|default]
+
+The scene is frame_bench.py's, with its matte or its default (Principled defaults) materials.
 """
 from __future__ import annotations
 
@@ -30,9 +33,12 @@ VARIANTS = {"Tiled": ("TILED", None), "Full Frame": ("FULL_FRAME", None),
 
 
 def main():
-    opts = kit.script_options({"size": (1920, 1080), "rounds": 5}, {"size": kit.frame_size, "rounds": int})
+    opts = kit.script_options({"size": (1920, 1080), "rounds": 5, "scene": ["matte"]},
+                              {"size": kit.frame_size, "rounds": int, "scene": kit.names_among(fb.SCENES, "scene")})
+    if len(opts["scene"]) != 1:
+        raise ValueError(f"--scene: one of {', '.join(fb.SCENES)}")
     fb._register_addon(os.path.join(os.path.dirname(HERE), "addon"))
-    scene, _ = fb.build_scene(opts["size"], 1)
+    scene, _ = fb.build_scene(opts["size"], 1, opts["scene"][0])
     fb.configure(scene, "glint", {"preset": "BALANCED", "backend": "AUTO"})
     bpy.ops.render.render()  # sets the compositor up, warms the caches
     stamps = []
@@ -52,7 +58,7 @@ def main():
     for node in group.nodes:
         node.mute = False
     w, h = opts["size"]
-    print(f"\ncompositor_phase: {w}x{h}, Glint balanced, medians of {opts['rounds']} rounds")
+    print(f"\ncompositor_phase: {w}x{h}, {opts['scene'][0]} scene, Glint balanced, medians of {opts['rounds']} rounds")
     for name, ms in res.items():
         print(f"  {name:<22}{statistics.median(ms):6.0f} ms   {sorted(round(x) for x in ms)}")
 
