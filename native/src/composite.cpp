@@ -96,7 +96,10 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
       top = std::max(top, weight.px(x, y)[3]);
     }
   if (x1 < 0 || !(top > 0.0f)) return;
-  const int reach = static_cast<int>(std::ceil(std::exp2(top - 1.0f) * kChamferSlack));
+  // Any lod past the image's size reaches the whole image (and an infinite
+  // one from an outside caller must not overflow the cast).
+  const float far = std::exp2(top - 1.0f) * kChamferSlack;
+  const int reach = far < static_cast<float>(std::max(w, h)) ? static_cast<int>(std::ceil(far)) : std::max(w, h);
   x0 = std::max(0, x0 - reach), y0 = std::max(0, y0 - reach);
   x1 = std::min(w - 1, x1 + reach), y1 = std::min(h - 1, y1 + reach);
   const int bw = x1 - x0 + 1, bh = y1 - y0 + 1;

@@ -134,6 +134,9 @@ def test_nothing_to_continue_without_a_blurred_hit():
     assert np.array_equal(glint_core.continue_lod(weight, np.zeros_like(uv), spec, pos), weight)
     with pytest.raises(ValueError, match="uv"):
         glint_core.continue_lod(weight, uv[:5], spec, pos)
+    huge = weight.copy()
+    huge[4, 4, 3] = np.inf  # reaches the whole frame, without overflowing
+    assert glint_core.continue_lod(huge, uv, spec, pos)[0, 0, 3] == np.inf
 
 
 @pytest.fixture(scope="module")
