@@ -18,7 +18,9 @@ isolates the reflections of the objects three ways:
 Every frame is read back as linear float from an EXR (view transform Standard). Over
 the reflecting pixels (on a reflecting surface, away from its edges, where Cycles'
 difference is significant) it prints per method: strength = sum(m*c)/sum(c*c), the
-projection of its reflection on Cycles'; error = L1(m - c)/L1(c); the largest change
+projection of its reflection on Cycles'; error = L1(m - c)/L1(c); the false area (the
+reflecting surfaces' pixels where Cycles' reflection is under the threshold but the
+method changes the frame by more than it, over the reflecting pixels); the largest change
 the method makes on the pixels that reflect nothing (off the reflecting surfaces); and
 the median wall time it adds to the Eevee frame. docs/look.md explains the method. Usage, from
 a checkout after building:
@@ -350,13 +352,17 @@ def _box3(a):
     return sum(padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)) / 9.0
 
 
-def figures(diff, c, reflecting, elsewhere):
-    """strength, error over the reflecting pixels; largest change elsewhere."""
+def figures(diff, c, reflecting, elsewhere, quiet, threshold):
+    """strength, error over the reflecting pixels; largest change elsewhere; false
+    area: the pixels of the reflecting surfaces where Cycles' reflection is below the
+    threshold (``quiet``) but the method changes the frame by more than it, as a share
+    of the reflecting pixels."""
     m, ref = diff[reflecting], c[reflecting]
     strength = float((m * ref).sum() / (ref * ref).sum())
     error = float(np.abs(m - ref).sum() / np.abs(ref).sum())
     change = float(np.abs(diff[elsewhere]).max()) if elsewhere.any() else 0.0
-    return strength, error, change
+    false_area = float((quiet & (np.abs(diff) @ LUMA > threshold)).sum() / reflecting.sum())
+    return strength, error, change, false_area
 
 
 def _srgb(linear):
@@ -437,15 +443,16 @@ def run_scene(name, opts, state, tmp):
         raise RuntimeError(f"scene {name}: no pixel reflects more than --threshold {opts['threshold']}")
     diffs = {"cycles": c, "ssr": frames["ssr"] - frames["plain"], "glint": frames["glint"] - frames["plain"]}
     added = {"cycles": float("nan"), **{m: statistics.median(v) for m, v in added_ms.items()}}
+    quiet = on & ~reflecting
     rows = []
     for method in METHODS:
-        strength, error, change = figures(diffs[method], c, reflecting, off)
+        strength, error, change, false_area = figures(diffs[method], c, reflecting, off, quiet, opts["threshold"])
         if method == "cycles":
             change = float(np.abs(c[off]).max()) if off.any() else 0.0
-        rows.append((name, method, strength, error, change, added[method]))
+        rows.append((name, method, strength, error, change, false_area, added[method]))
     # Cycles' own noise: one seed's reflection against the other's. The error of the
     # average of both (the reference) is about half of this.
-    noise = figures(c_b, c_a, reflecting, off)[1]
+    noise = figures(c_b, c_a, reflecting, off, quiet, opts["threshold"])[1]
 
     os.makedirs(opts["out"], exist_ok=True)
     for method, frame in (("cycles", cycles_frame), ("ssr", frames["ssr"]), ("glint", frames["glint"])):
@@ -487,11 +494,11 @@ def main():
           f"{kit.eevee_reflections_name(bpy.context.scene)}), {w}x{h}, Cycles {opts['cycles-samples']} samples (2 seeds x "
           f"{opts['cycles-samples'] // 2}), Eevee {opts['eevee-samples']} samples, threshold "
           f"{opts['threshold']}, time added: median of {opts['rounds']} rounds, add-on {opts['addon']}\n")
-    print("| scene | method | strength | error | max change elsewhere | time added ms |")
-    print("|---|---|---:|---:|---:|---:|")
-    for name, method, strength, error, change, added in all_rows:
+    print("| scene | method | strength | error | false area | max change elsewhere | time added ms |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for name, method, strength, error, change, false_area, added in all_rows:
         ms = "-" if math.isnan(added) else f"{added:.0f}"
-        print(f"| {name} | {method} | {strength:.2f} | {error:.2f} | {change:.4f} | {ms} |")
+        print(f"| {name} | {method} | {strength:.2f} | {error:.2f} | {false_area:.3f} | {change:.4f} | {ms} |")
     print("\n| scene | reflecting pixels | surface pixels | pixels elsewhere | Cycles seed-to-seed error "
           "| Cycles s | Eevee s | Glint stages ms |")
     print("|---|---:|---:|---:|---:|---:|---:|---|")
