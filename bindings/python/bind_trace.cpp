@@ -109,20 +109,25 @@ pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& no
                               const pyb::handle& specular, const pyb::handle& projection, float max_distance,
                               float resolution, int steps, float thickness, const std::string& march,
                               const std::string& blocked, const pyb::handle& back_position,
-                              const pyb::handle& mesh, const std::string& backend, int threads,
-                              double memory_limit_mb) {
+                              const pyb::handle& mesh, const pyb::handle& back_albedo,
+                              const std::string& backend, int threads, double memory_limit_mb) {
   if (specular.is_none()) throw InvalidArgument("specular", "expected a float32 [H, W, 4] array, got None");
   const TraceCall c = trace_call("composite_layers", position, normal, projection, max_distance, resolution,
                                  steps, thickness, march, blocked, back_position, mesh, specular, backend,
-                                 threads, memory_limit_mb, 2);
+                                 threads, memory_limit_mb, back_albedo.is_none() ? 2 : 4);
+  const std::optional<Image> albedo = optional_image(back_albedo, "back_albedo", c.pos);
   CompositeLayers layers;
   {
     pyb::gil_scoped_release release;
-    layers = composite_layers(*c.be, c.inputs(), c.opt, threads);
+    layers = composite_layers(*c.be, c.inputs(), c.opt, threads, albedo ? &*albedo : nullptr);
   }
   pyb::dict out;
   out["uv"] = array_from_image(std::move(layers.uv));
   out["weight"] = array_from_image(std::move(layers.weight));
+  if (albedo) {
+    out["hidden"] = array_from_image(std::move(layers.hidden));
+    out["hidden_pixels"] = layers.hidden_pixels;
+  }
   out["reflective_pixels"] = layers.reflective_pixels;
   out["any_rough"] = layers.any_rough;
   return out;
@@ -192,14 +197,34 @@ void bind_trace(pyb::module_& m) {
   m.def("composite_layers", &py_composite_layers, "position"_a, "normal"_a, "specular"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = t.max_distance, "resolution"_a = t.resolution, "steps"_a = t.steps,
         "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "blocked"_a = to_string(t.blocked),
-        "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "backend"_a = s::backend.initial_name,
-        "threads"_a = s::threads.initial_int(), "memory_limit_mb"_a = t.memory_limit_mb,
+        "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "back_albedo"_a = pyb::none(),
+        "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
+        "memory_limit_mb"_a = t.memory_limit_mb,
         "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
         "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, 1) from trace(), the uv\n"
         "of misses within 2 pixels of a hit continued from the hits; 'weight': float32 [H, W, 4], rgb\n"
         "specular_weight(), a cone_lod() continued to the misses around blurred hits (continue_lod());\n"
         "'reflective_pixels': pixels traced; 'any_rough': some lod > 0}.\n"
-        "Trace keywords as trace(); nothing is traced when no pixel reflects.");
+        "back_albedo: optional float32 [H, W, 4], rasterize()'s back_albedo: adds 'hidden' (hidden_sides():\n"
+        "(albedo x vis, vis) where a ray met an object's hidden side, whose uv then has vis 0) and\n"
+        "'hidden_pixels'. Trace keywords as trace(); nothing is traced when no pixel reflects.");
+  m.def(
+      "hidden_sides",
+      [](const pyb::handle& uv, const pyb::handle& back_albedo) {
+        const Image u = image_from_array(uv, "uv", 0.0f, 4);
+        const Image a = image_from_array(back_albedo, "back_albedo", 0.0f, 4);
+        uint64_t count = 0;
+        Image out;
+        {
+          pyb::gil_scoped_release release;
+          out = hidden_sides(u, a, count);
+        }
+        return pyb::make_tuple(array_from_image(std::move(out)), count);
+      },
+      "uv"_a, "back_albedo"_a,
+      "(hidden, count) from a trace's uv (u, v, vis, hit vis) with blocked='occluder': where the\n"
+      "report is an occluder (vis > 0, hit vis 0) whose texel has a back surface (back_albedo alpha\n"
+      "> 0), hidden = (back_albedo rgb x vis, vis): the hidden side the ray entered; 0 elsewhere.");
   m.def(
       "continue_missing_uv",
       [](const pyb::handle& uv, int rings) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "glint/errors.h"
@@ -145,8 +146,39 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
     }
 }
 
+Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& count, int threads) {
+  if (back_albedo.width != traced_uv.width || back_albedo.height != traced_uv.height)
+    throw InvalidArgument("back_albedo", "expected the trace's size " + std::to_string(traced_uv.width) + "x" +
+                                             std::to_string(traced_uv.height) + ", got " +
+                                             std::to_string(back_albedo.width) + "x" +
+                                             std::to_string(back_albedo.height));
+  const int w = traced_uv.width, h = traced_uv.height;
+  Image out(w, h, 0.0f);
+  std::atomic<uint64_t> total{0};
+  parallel_rows(0, h, threads, [&](int y) {
+    uint64_t n = 0;
+    for (int x = 0; x < w; ++x) {
+      const float* t = traced_uv.px(x, y);
+      if (!(t[2] > 0.0f) || t[3] != hiz::kEnteredHidden) continue;  // a hit, an occluder, or nothing
+      // The occluder's texel: blocked="occluder" reports its centre.
+      const int i = static_cast<int>(std::floor(t[0] * static_cast<float>(w)));
+      const int j = static_cast<int>(std::floor(t[1] * static_cast<float>(h)));
+      if (i < 0 || j < 0 || i >= w || j >= h) continue;
+      const float* a = back_albedo.px(i, j);
+      if (!(a[3] > 0.0f)) continue;  // an open surface: nothing known behind it
+      float* o = out.px(x, y);
+      for (int c = 0; c < 3; ++c) o[c] = a[c] * t[2];
+      o[3] = t[2];
+      ++n;
+    }
+    total.fetch_add(n, std::memory_order_relaxed);
+  });
+  count = total.load();
+  return out;
+}
+
 CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
-                                 int threads) {
+                                 int threads, const Image* back_albedo) {
   require_trace_inputs(in, opt);
   if (!in.specular) throw InvalidArgument("specular", "composite_layers needs the specular buffer");
   const Image& spec = *in.specular;
@@ -161,9 +193,13 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   if (out.reflective_pixels == 0) {
     out.uv = Image(spec.width, spec.height);
     out.weight = Image(spec.width, spec.height);
+    if (back_albedo) out.hidden = Image(spec.width, spec.height);
     return out;
   }
   out.uv = backend.trace(in, opt);
+  // Before the lod pass overwrites the trace's fourth channel, which tells
+  // an occluder from a hit.
+  if (back_albedo) out.hidden = hidden_sides(out.uv, *back_albedo, out.hidden_pixels, threads);
   out.weight = backend.specular_weight(in.position, in.normal, spec, in.projection);
   std::atomic<bool> rough{false};
   // The lod from the trace's own uv, before its misses are continued.
@@ -182,6 +218,13 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   out.any_rough = rough.load();
   if (out.any_rough) continue_lod_into_misses(out.weight, out.uv, spec, in.position);
   continue_missing_uv(out.uv, 2, threads);
+  // Until here a hidden side counted as a hit: it keeps its lod and its uv.
+  if (out.hidden_pixels) {
+    parallel_rows(0, spec.height, threads, [&](int y) {
+      for (int x = 0; x < spec.width; ++x)
+        if (out.hidden.px(x, y)[3] > 0.0f) out.uv.px(x, y)[2] = 0.0f;
+    });
+  }
   return out;
 }
 

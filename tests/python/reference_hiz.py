@@ -6,7 +6,9 @@ texel where the ray's depth span meets the texel's footprint range and the
 texel's tangent plane says Hit (the ray crosses it from the front, or is
 behind it by no more than a rounding slack) or Blocked (behind it within its
 thickness: report nothing, or with blocked="occluder" that texel's centre, as
-(u, v, edge fade, 0)). A texel's plane has its geometric normal, rebuilt
+(u, v, edge fade, 0); (u, v, edge fade, ENTERED_HIDDEN) when the ray is deeper
+than HIDDEN_SHARE of the thickness or comes into it from behind, which means it
+came in by the object's hidden side). A texel's plane has its geometric normal, rebuilt
 from the positions (plane_normals()), not its shading normal. The core reaches the same texel through a min/max
 pyramid; this file visits every texel on the line, in Python floats (IEEE
 double), so agreeing with it shows the pyramid never skips one.
@@ -30,6 +32,8 @@ BEHIND_SLACK = _S.BEHIND_SLACK
 FOOTPRINT_SPREAD = _S.FOOTPRINT_SPREAD
 EDGE_FADE = _S.EDGE_FADE   # share of the screen over which visibility fades at its edges
 UNCERTAIN = _S.UNCERTAIN   # confidence of a hit located only to its texel, or at an outline texel's edge
+ENTERED_HIDDEN = _S.ENTERED_HIDDEN  # an occluder's hit channel when the ray came in by the hidden side
+HIDDEN_SHARE = _S.HIDDEN_SHARE  # deeper than this share of the thickness: came in from behind
 
 
 def _seen(p):
@@ -231,9 +235,9 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                     if max(za, zb) >= lo and min(za, zb) <= hi:
                         outcome, th = _texel(pos, planes, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
                                              plane_row, plane_depth, texel_thickness, depth)
-                        if outcome == "blocked":
+                        if outcome in ("blocked", "entered"):
                             if blocked == "occluder":  # the texel's centre, no confidence
-                                result = (i + 0.5) / w, (j + 0.5) / h, None
+                                result = (i + 0.5) / w, (j + 0.5) / h, outcome
                             break
                         if outcome in ("hit", "hit on plane"):
                             q = f0 + th * d
@@ -244,8 +248,8 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
             if result is not None:
                 u, v, conf = result
                 fade = min(max(min(u, 1.0 - u, v, 1.0 - v) / EDGE_FADE, 0.0), 1.0)
-                if conf is None:  # the occluder: shown, but no hit found
-                    out[y, x] = (u, v, fade, 0.0)
+                if isinstance(conf, str):  # the occluder: shown, but no hit found
+                    out[y, x] = (u, v, fade, ENTERED_HIDDEN if conf == "entered" else 0.0)
                 else:
                     vis = conf * fade
                     out[y, x] = (u, v, vis, vis)
@@ -288,10 +292,10 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     da = behind_by(ta)
     if da <= slack:
         return "hit on plane", ta
-    if da <= thick:
-        return "blocked", ta
+    if da <= thick:  # inside: came in by the side it is nearer to
+        return ("entered" if da > HIDDEN_SHARE * thick else "blocked"), ta
     if b_behind and behind_by(tb) <= thick:
-        return "blocked", tb
+        return "entered", tb
     return "pass", ta
 
 

@@ -187,3 +187,71 @@ def test_the_specular_buffer_is_required():
     gb = A.render(A.mirror_floor_scene(), 16, 12)
     with pytest.raises(ValueError, match="specular"):
         glint_core.composite_layers(gb["position"], gb["normal"], None, gb["projection"])
+
+
+def hidden_reference(uv, back_albedo):
+    """docs/marches.md, *Blocked rays*: an occluder entered by its hidden side
+    (hit channel ENTERED_HIDDEN) whose texel has a back surface shows that
+    surface's albedo, times its visibility; everything else is 0."""
+    entered_hidden = glint_core.schema()["constants"]["ENTERED_HIDDEN"]
+    h, w = uv.shape[:2]
+    out = np.zeros((h, w, 4), np.float32)
+    for y in range(h):
+        for x in range(w):
+            u, v, vis, hit = uv[y, x]
+            if not vis > 0 or hit != entered_hidden:
+                continue
+            i, j = int(np.floor(u * np.float32(w))), int(np.floor(v * np.float32(h)))  # in float32, as the core
+            if 0 <= i < w and 0 <= j < h and back_albedo[j, i, 3] > 0:
+                out[y, x, :3] = back_albedo[j, i, :3] * vis
+                out[y, x, 3] = vis
+    return out
+
+
+def test_hidden_sides_take_the_back_surfaces_albedo():
+    h, w = 6, 8
+    uv = np.zeros((h, w, 4), np.float32)
+    albedo = np.zeros((h, w, 4), np.float32)
+    albedo[2, 3] = (0.5, 0.25, 0.125, 1.0)                 # a closed object's far side
+    centre = ((3 + 0.5) / w, (2 + 0.5) / h)
+    uv[0, 0] = (*centre, 0.8, -1.0)                       # entered by the hidden side
+    uv[0, 1] = (*centre, 0.8, 0.0)                        # an occluder found a texel late
+    uv[0, 2] = (*centre, 0.8, 0.8)                        # a hit
+    uv[0, 3] = ((1 + 0.5) / w, (1 + 0.5) / h, 1.0, -1.0)  # entered, but no back surface there
+    got, count = glint_core.hidden_sides(uv, albedo)
+    assert count == 1
+    assert np.allclose(got[0, 0], (0.4, 0.2, 0.1, 0.8)) and not got.reshape(-1, 4)[1:].any()
+    assert np.array_equal(got, hidden_reference(uv, albedo))
+    with pytest.raises(ValueError, match="back_albedo"):
+        glint_core.hidden_sides(uv, albedo[:5])
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gl"])
+def test_layers_show_hidden_sides_in_place_of_the_occluder(backend, request):
+    """With the back layer's albedo, the pixels whose rays came in by an object's
+    hidden side leave the uv's visibility (vis 0, uv kept) for the hidden image;
+    the rest of the layers are what they are without it."""
+    if backend == "gl":
+        request.getfixturevalue("gl")
+    sc = A.mirror_floor_scene()
+    gb = A.render(sc, 160, 120)
+    back = A.back_layer(sc, gb)
+    albedo = np.zeros_like(back)
+    rng = np.random.default_rng(1)
+    albedo[back[..., 3] > 0] = np.concatenate([rng.uniform(0.1, 0.9, ((back[..., 3] > 0).sum(), 3)),
+                                              np.ones(((back[..., 3] > 0).sum(), 1))], axis=1)
+    proj = gb["projection"].astype(np.float32)
+    kw = dict(glint_core.presets()["balanced"], backend=backend, back_position=back, blocked="occluder")
+    plain = glint_core.composite_layers(gb["position"], gb["normal"], gb["specular"], proj, **kw)
+    layers = glint_core.composite_layers(gb["position"], gb["normal"], gb["specular"], proj, **kw,
+                                         back_albedo=albedo)
+    uv = glint_core.trace(gb["position"], gb["normal"], proj, specular=gb["specular"], **kw)
+    want = hidden_reference(uv, albedo)
+    hidden = want[..., 3] > 0
+    assert layers["hidden_pixels"] == hidden.sum() > 50
+    assert np.array_equal(layers["hidden"], want)
+    assert np.array_equal(layers["uv"][hidden, 2], np.zeros(hidden.sum(), np.float32))
+    assert np.array_equal(layers["uv"][~hidden], plain["uv"][~hidden])
+    assert np.array_equal(layers["uv"][hidden, :2], plain["uv"][hidden, :2])
+    assert np.array_equal(layers["weight"], plain["weight"])
+    assert "hidden" not in plain

@@ -27,6 +27,10 @@ BEHIND_SLACK = 0.001
 EDGE_FADE = 0.075
 # hiz: confidence of a hit located only to its texel, or at the outer edge of an outline texel
 UNCERTAIN = 0.5
+# hiz, blocked='occluder': the hit channel of a ray that came into an object by its hidden side
+ENTERED_HIDDEN = -1.0
+# hiz: inside a texel's thickness, deeper than this share of it counts as entered from behind
+HIDDEN_SHARE = 0.5
 # hiz: a texel's depth range at most this share of its view distance either way
 FOOTPRINT_SPREAD = 0.5
 # hiz: least cosine between normals of pixels that share a ray
@@ -54,6 +58,8 @@ CONSTANTS = {
     "BEHIND_SLACK": BEHIND_SLACK,
     "EDGE_FADE": EDGE_FADE,
     "UNCERTAIN": UNCERTAIN,
+    "ENTERED_HIDDEN": ENTERED_HIDDEN,
+    "HIDDEN_SHARE": HIDDEN_SHARE,
     "FOOTPRINT_SPREAD": FOOTPRINT_SPREAD,
     "REUSE_COS": REUSE_COS,
     "REUSE_DEPTH": REUSE_DEPTH,

@@ -18,8 +18,13 @@ struct CompositeLayers {
   // level (cone_lod_at) at hits, continued to the misses around them
   // (continue_lod_into_misses); 0 for mirrors and pixels that do not reflect.
   Image weight;
+  // Given back_albedo: hidden_sides(). Those pixels' uv has vis 0 (a
+  // compositor must not also show the front texel there), their u, v kept
+  // (Map UV's derivatives) and their lod a hit's. Empty without back_albedo.
+  Image hidden;
   // Pixels seen with a positive specular amount: what the trace traced.
   uint64_t reflective_pixels = 0;
+  uint64_t hidden_pixels = 0;
   // Some pixel's lod is above 0: a blur has work to do.
   bool any_rough = false;
 };
@@ -44,10 +49,21 @@ void continue_missing_uv(Image& uv, int rings, int threads = 0);
 constexpr float kChamferSlack = 1.0824f;
 void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position);
 
+// A ray that blocked="occluder" reports met an object inside its thickness:
+// it entered through the side the camera does not see, the back-face layer's
+// surface at the occluder's texel. Where that texel has a back surface
+// (`back_albedo` alpha > 0, glint::GBufferImages::back_albedo), the pixel
+// shows that surface in its material's colour: (albedo x vis, vis), 0
+// elsewhere. Reads the trace's fourth channel (hit visibility, 0 for an
+// occluder); `count` gets the number of such pixels. How a compositor lights
+// the colour is its choice (docs/addon.md, *Hidden sides*).
+Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& count, int threads = 0);
+
 // Trace on `backend` (specular given: only reflective pixels are traced),
 // then the weight on the same backend and the lod. No trace, weight or lod
-// when nothing reflects (all zero, reflective_pixels 0).
+// when nothing reflects (all zero, reflective_pixels 0). With back_albedo
+// (same size as the position), also the hidden sides (hidden_sides()).
 CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
-                                 int threads = 0);
+                                 int threads = 0, const Image* back_albedo = nullptr);
 
 }  // namespace glint

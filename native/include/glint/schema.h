@@ -71,6 +71,14 @@ constexpr float kBehindSlack = 1e-3f;
 // chance that the object still covers the hit, outline_confidence()).
 constexpr float kEdgeFade = 0.075f;
 constexpr float kUncertain = 0.5f;
+// blocked="occluder": the fourth channel (the hit's own visibility) of a ray
+// that came into an object by the side the camera does not see (its back
+// layer's surface) is this, where an occluder found a texel late has 0
+// (docs/marches.md, *Blocked rays*).
+constexpr float kEnteredHidden = -1.0f;
+// An occluder's report is a hidden entry when, inside the texel's thickness,
+// the ray lies deeper behind the front than this share of the thickness.
+constexpr float kHiddenShare = 0.5f;
 // A texel's footprint range is clamped to its centre +- this share of its
 // view distance (plus its thickness): a plane seen edge-on would otherwise
 // reach infinity and make every cell above it overlap every ray.
@@ -126,6 +134,10 @@ inline constexpr Constant kConstants[] = {
      "hiz: share of the screen over which visibility fades at its edges"},
     {"UNCERTAIN", Type::Float, hiz::kUncertain, nullptr,
      "hiz: confidence of a hit located only to its texel, or at the outer edge of an outline texel"},
+    {"ENTERED_HIDDEN", Type::Float, hiz::kEnteredHidden, nullptr,
+     "hiz, blocked='occluder': the hit channel of a ray that came into an object by its hidden side"},
+    {"HIDDEN_SHARE", Type::Float, hiz::kHiddenShare, nullptr,
+     "hiz: inside a texel's thickness, deeper than this share of it counts as entered from behind"},
     {"FOOTPRINT_SPREAD", Type::Float, hiz::kFootprintSpread, nullptr,
      "hiz: a texel's depth range at most this share of its view distance either way"},
     {"REUSE_COS", Type::Float, hiz::kReuseCos, nullptr,

@@ -4,7 +4,8 @@
 // each step) and of march_hiz.cpp (the ray, the texel test);
 // same operations in the same order. trace_pixel() returns (u, v, visibility,
 // visibility) at a hit (its confidence times the fade at the screen's edge),
-// with u_blocked an occluder's (u, v, fade, 0), else 0. Apart from
+// with u_blocked an occluder's (u, v, fade, 0) or, entered by its hidden side,
+// (u, v, fade, ENTERED_HIDDEN); else 0. Apart from
 // trace_hiz.frag's main() so that trace_hiz_list.comp can walk the pixels it
 // picks from a list.
 // Needs common.glsl, trace_common.glsl and hiz_common.glsl.
@@ -17,7 +18,7 @@ uniform int u_levels;
 layout(rgba32f, binding = 5) uniform readonly image2D u_position_img;  // the G-buffer's positions
 layout(rgba32f, binding = 6) uniform readonly image2D u_planes;  // the plane normals (hiz_base.frag), xyz used
 // TraceOptions::blocked: 1 (occluder) reports a blocked ray at the texel that
-// blocks it as (u, v, edge fade, 0); 0 (miss) reports nothing.
+// blocks it as (u, v, edge fade, 0 or ENTERED_HIDDEN); 0 (miss) reports nothing.
 uniform int u_blocked;
 
 // The ray, in the homogeneous form of the CPU's Ray: at screen fraction t
@@ -132,7 +133,8 @@ ivec4 cell_bounds(int level, ivec2 c, ivec2 size) {
 
 const int PASS = 0;
 const int HIT = 1;
-const int BLOCKED = 2;
+const int BLOCKED = 2;  // inside the thickness, nearer the front (march_hiz.cpp)
+const int ENTERED = 3;  // came in by the hidden side
 
 // n, p: the texel's plane normal (u_planes) and position, for the outline test after a hit.
 int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, out vec3 n, out vec3 p) {
@@ -174,12 +176,13 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
     located = true;
     return HIT;
   }
-  if (da <= thick) return BLOCKED;
+  precise float share = HIDDEN_SHARE * thick;
+  if (da <= thick) return da > share ? ENTERED : BLOCKED;
   if (b_behind) {
     precise float sxb = (g_f0.x + tb * g_d.x) * sxs - 1.0;
     precise float syb = (g_f0.y + tb * g_d.y) * sys - 1.0;
     precise float db = ray_depth(tb) - plane_depth(L, sxb, syb);
-    if (db <= thick) return BLOCKED;
+    if (db <= thick) return ENTERED;
   }
   return PASS;
 }
@@ -231,6 +234,7 @@ vec4 trace_pixel(ivec2 origin) {
   int it = 0;
   bool hit = false;
   bool blocked = false;
+  bool entered = false;
   ivec2 hit_c;
   float hit_t;
   bool hit_located;
@@ -283,9 +287,10 @@ vec4 trace_pixel(ivec2 origin) {
     bool located;
     vec3 n, p;
     int outcome = texel_hit(c, t, te, th, located, n, p);
-    if (outcome == BLOCKED) {
+    if (outcome == BLOCKED || outcome == ENTERED) {
       if (u_blocked == 0) return vec4(0.0);
       blocked = true;  // what hides the hit: its texel's centre (march_hiz.cpp)
+      entered = outcome == ENTERED;
       hit_c = c;
       break;
     }
@@ -309,7 +314,7 @@ vec4 trace_pixel(ivec2 origin) {
   // run once per pixel, not once per texel test of any lane.
   if (blocked) {
     vec2 o = (vec2(hit_c) + 0.5) / u_size;
-    return vec4(o, hit_visibility(o.x, o.y, 1.0), 0.0);
+    return vec4(o, hit_visibility(o.x, o.y, 1.0), entered ? ENTERED_HIDDEN : 0.0);
   }
   if (!hit) return vec4(0.0);
   precise float hx = g_f0.x + hit_t * g_d.x;

@@ -41,6 +41,8 @@ constexpr float kPlaneTolerance = hiz::kPlaneTolerance;
 constexpr float kBehindSlack = hiz::kBehindSlack;
 constexpr float kEdgeFade = hiz::kEdgeFade;
 constexpr float kUncertain = hiz::kUncertain;
+constexpr float kEnteredHidden = hiz::kEnteredHidden;
+constexpr float kHiddenShare = hiz::kHiddenShare;
 constexpr float kFootprintSpread = hiz::kFootprintSpread;
 constexpr float kReuseCos = hiz::kReuseCos;
 constexpr float kReuseDepth = hiz::kReuseDepth;
@@ -203,8 +205,11 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
 enum class TexelOutcome {
   Pass,     // in front of the surface, or behind its thickness: walk on
   Hit,      // crosses the surface from the front: the reflection is there
-  Blocked,  // inside the surface's thickness: what it hits is hidden, so the
-            // ray reports nothing and the walk ends
+  Blocked,  // inside the surface's thickness, nearer its front: most likely
+            // a crossing of the front found a texel late; the walk ends
+  Entered,  // inside the thickness, nearer its back, or crossing into it from
+            // behind: the ray came in through the side the camera does not
+            // see (a hidden hit); the walk ends
 };
 
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
@@ -250,8 +255,11 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
     located = true;  // on the plane, to the rounding slack
     return TexelOutcome::Hit;
   }
-  if (da <= thick) return TexelOutcome::Blocked;
-  if (b_behind && behind_by(tb) <= thick) return TexelOutcome::Blocked;
+  // Which side the ray came in by: the one it is nearer to. A crossing of the
+  // front found late lies just behind it; a ray that passed behind the
+  // object the texel before and is inside now came in by the back.
+  if (da <= thick) return da > kHiddenShare * thick ? TexelOutcome::Entered : TexelOutcome::Blocked;
+  if (b_behind && behind_by(tb) <= thick) return TexelOutcome::Entered;
   return TexelOutcome::Pass;
 }
 
@@ -343,7 +351,7 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
   const TexelOutcome hit = texel_hit(q.s, q.planes, q.cam, back, r, i, j, ta, tb, th, located);
   if (hit == TexelOutcome::Pass) return true;
   float* out = q.out.px(q.px[lane][0], q.px[lane][1]);
-  if (hit == TexelOutcome::Blocked) {
+  if (hit == TexelOutcome::Blocked || hit == TexelOutcome::Entered) {
     // What hides the hit: the colour stages may show it in place of the
     // sky (docs/marches.md, "Blocked rays"). The texel's centre, not where
     // the ray entered it: a bilinear read on its edge would mix in the
@@ -354,6 +362,7 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
     out[0] = u;
     out[1] = v;
     out[2] = hit_visibility(u, v, 1.0f);
+    out[3] = hit == TexelOutcome::Entered ? kEnteredHidden : 0.0f;
     return false;
   }
   const float hx = r.f0[0] + th * r.d[0], hy = r.f0[1] + th * r.d[1];
