@@ -19,6 +19,7 @@ from . import gather
 from .host import data as host_data, engines, nodes as host_nodes
 from .logic import compositing as cg
 from .logic import materials
+from .logic import settings as settings_logic
 from .logic import world as world_logic
 from .state import STATE
 
@@ -210,12 +211,14 @@ def build_group():
 def update_group(glint, rough: bool = True, bounce: bool = False, world_specular: bool = False) -> None:
     """Push the values the group reads: the debug switches, whether the blur
     levels run (``rough``: some reflective material of the scene is rough),
-    whether the second bounce does and whether S is the world colour x W
-    (``world_specular``)."""
+    whether the second bounce does, whether S is the world colour x W
+    (``world_specular``) and whether hidden sides are shown (the frame then
+    fills the hidden image: ``settings.shows_hidden_sides``)."""
     group = find_group()
     if group is None:
         return
-    for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular).items():
+    hidden = settings_logic.shows_hidden_sides({"fill_hidden": glint.fill_hidden})
+    for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular, hidden).items():
         node = group.nodes.get(name)
         if node is not None:
             host_nodes.set_switch(node, check)

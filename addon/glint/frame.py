@@ -36,13 +36,17 @@ def settings_dict(glint) -> dict:
     }
 
 
-def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = False, size=None):
+def rasterize(core, exp: gather.SceneExport, backend: str, back_layer: bool = False, size=None,
+              back_albedo: bool = False):
     """The G-buffer of an export (with its normal maps, if any) on ``backend``; with
-    ``back_layer``, also the surface behind each pixel (the march's true thickness).
+    ``back_layer``, also the surface behind each pixel (the march's true thickness),
+    and with ``back_albedo`` its material's albedo (what a hidden side shows).
     ``size`` (w, h): fewer pixels over the same view (the projection does not
     depend on the pixel count); default the camera's."""
     t = exp.triangles
     kwargs = {"back_layer": True} if back_layer else {}
+    if back_layer and back_albedo and exp.material_albedo is not None:
+        kwargs["material_albedo"] = exp.material_albedo
     if t.uvs is not None and exp.normal_maps:
         kwargs.update(uvs=t.uvs, tangents=t.tangents, material_normal_map=exp.material_normal_map,
                       normal_maps=exp.normal_maps)
@@ -227,14 +231,18 @@ def _rasterize_and_trace(frame: FrameState, size) -> bool:
     (``core.composite_layers``), into ``frame``; False when no pixel reflects."""
     core, exp, report = frame.core, frame.exp, frame.report
     kw = dict(frame.kwargs, **settings_logic.look_kwargs(frame.values))
+    # The hidden sides' colours need the back layer's albedo (blocked="occluder" only).
+    albedo = settings_logic.shows_hidden_sides(frame.values)
     with frame.timings.measure("rasterize"):
         gbuf, used = settings_logic.with_cpu_fallback(
-            lambda b: rasterize(core, exp, b, frame.back_layer, size), frame.backend, frame.requested, log)
+            lambda b: rasterize(core, exp, b, frame.back_layer, size, albedo), frame.backend, frame.requested, log)
     frame.progress.check()
     position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
     report.backend = used
     if frame.back_layer:
         kw["back_position"] = gbuf["back_position"]
+    if "back_albedo" in gbuf:
+        kw["back_albedo"] = gbuf["back_albedo"]
     kw.update(mesh_kwargs(core, exp, kw["march"], frame.note))
     if used == "gl" and not core.march_details()[kw["march"]]["gl"]:
         log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
@@ -260,7 +268,9 @@ def publish(frame: FrameState) -> None:
     """Hand the frame's layers on: the compositor's images, and the arrays the
     debug operators and tests read (``STATE.arrays``)."""
     report, cam = frame.report, frame.camera
-    uv, weight = frame.layers["uv"], frame.layers["weight"]
+    uv, weight, hidden = frame.layers["uv"], frame.layers["weight"], frame.layers.get("hidden")
+    if hidden is not None and frame.layers.get("hidden_pixels"):
+        frame.note(f"{int(frame.layers['hidden_pixels'])} pixels show a hidden side")
     if not frame.layers["any_rough"]:
         frame.note("no rough reflection: blur not needed")
     if STATE.second_bounce is False:
@@ -268,22 +278,23 @@ def publish(frame: FrameState) -> None:
     position, normal, specular = frame.position, frame.normal, frame.specular
     if frame.factor > 1:
         with frame.timings.measure("upsample"):
-            uv, weight, position, normal, specular = _upsample(frame, uv, weight)
+            uv, weight, hidden, position, normal, specular = _upsample(frame, uv, weight, hidden)
         note = reduced.describe(cam.width, cam.height, frame.factor, *frame.first_refusal)
         frame.note(note)
         log(f"frame {report.frame}: {note}")
     frame.progress.check()
     with frame.timings.measure("images"):
-        _fill_images(frame, uv, weight, position, normal, specular)
+        _fill_images(frame, uv, weight, hidden, position, normal, specular)
     with STATE.lock:
         STATE.arrays = {"position": position, "normal": normal, "specular": specular, "uv": uv,
-                        "weight": weight, "projection": cam.projection, "view": cam.view, "frame": report.frame}
+                        "weight": weight, "hidden": hidden, "projection": cam.projection, "view": cam.view,
+                        "frame": report.frame}
     report.status = "ok"
 
 
-def _upsample(frame: FrameState, uv, weight):
-    """A reduced frame's layers at the frame's size: (uv, weight, position,
-    normal, specular). The compositor reads the uv and the weight at the
+def _upsample(frame: FrameState, uv, weight, hidden):
+    """A reduced frame's layers at the frame's size: (uv, weight, hidden,
+    position, normal, specular); hidden stays None when there is none. The compositor reads the uv and the weight at the
     frame's size; the G-buffer only for a debug view or the layers EXR (else it
     stays reduced: fewer frame-size images when memory is short)."""
     cam, values = frame.camera, frame.values
@@ -291,20 +302,21 @@ def _upsample(frame: FrameState, uv, weight):
     lod = weight[..., 3]
     lod[lod > 0] += np.float32(np.log2(frame.factor))  # the footprint in frame pixels is `factor` times larger
     refl = texels.reflective_mask(position, specular)
-    stretched = [uv, weight]
+    stretched = [uv, weight, np.zeros_like(uv) if hidden is None else hidden]
     if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
         stretched += [position, normal, specular]
     stretched = [reduced.upsample_nearest(a, cam.width, cam.height) for a in stretched]
     uv, weight = stretched[:2]
-    if len(stretched) == 5:
-        position, normal, specular = stretched[2:]
+    hidden = None if hidden is None else stretched[2]
+    if len(stretched) == 6:
+        position, normal, specular = stretched[3:]
     frame.report.reflective_pixels = int(np.count_nonzero(reduced.upsample_nearest(refl, cam.width, cam.height)))
-    return uv, weight, position, normal, specular
+    return uv, weight, hidden, position, normal, specular
 
 
-def _fill_images(frame: FrameState, uv, weight, position, normal, specular) -> None:
-    """The compositor's images: the uv and weight of the region that can change,
-    and the debug view's or the layers EXR's G-buffer images."""
+def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specular) -> None:
+    """The compositor's images: the uv, weight and hidden sides of the region
+    that can change, and the debug view's or the layers EXR's G-buffer images."""
     cam, view = frame.camera, frame.values["debug_view"]
     # The group composites only the region that can change; a debug
     # view or the layers EXR shows the uv and vis of the whole frame,
@@ -312,8 +324,17 @@ def _fill_images(frame: FrameState, uv, weight, position, normal, specular) -> N
     if view != "NONE" or frame.values["write_layers_exr"] or not host_nodes.compositor_places_regions():
         region = (0, 0, cam.width, cam.height)
     else:
-        region = compositing.image_region(uv[..., 2], weight[..., 3])
+        region = compositing.image_region(uv[..., 3], weight[..., 3])
     images = compositing.region_images(uv, weight, region)
+    keys = {compositing.IMAGE_FINE: region}
+    if settings_logic.shows_hidden_sides(frame.values):
+        # The group reads it (its switch is on): zeros where no ray met a hidden
+        # side, written again only when that changes.
+        if hidden is not None and frame.layers.get("hidden_pixels"):
+            images[compositing.IMAGE_HIDDEN] = compositing.region_cut(hidden, region)
+        else:
+            images[compositing.IMAGE_HIDDEN] = compositing.region_zeros(region)
+            keys[compositing.IMAGE_HIDDEN] = ("none", region)
     frame.report.region = region
     if view in compositing.GBUFFER_DEBUG_VIEWS:
         images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
@@ -323,4 +344,4 @@ def _fill_images(frame: FrameState, uv, weight, position, normal, specular) -> N
         n4[..., 3] = 1.0
         images[compositing.IMAGE_NORMAL] = n4
         images[compositing.IMAGE_SPECULAR] = specular
-    compositor.fill_images(images, keys={compositing.IMAGE_FINE: region})
+    compositor.fill_images(images, keys=keys)

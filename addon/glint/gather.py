@@ -126,7 +126,10 @@ def describe_shader(node, depth: int = 0) -> Optional[dict]:
                 "roughness": _socket_value(node.inputs["Roughness"])}
     if idn == "ShaderNodeEeveeSpecular":
         return {"kind": "specular", "color": _socket_value(node.inputs["Specular"]),
-                "roughness": _socket_value(node.inputs["Roughness"])}
+                "roughness": _socket_value(node.inputs["Roughness"]),
+                "base_color": _socket_value(node.inputs["Base Color"])}
+    if idn == "ShaderNodeBsdfDiffuse":
+        return {"kind": "diffuse", "color": _socket_value(node.inputs["Color"])}
     if idn == "ShaderNodeBsdfGlass":
         return {"kind": "glass", "ior": _socket_value(node.inputs["IOR"]),
                 "roughness": _socket_value(node.inputs["Roughness"])}
@@ -202,8 +205,9 @@ class MaterialTable:
     """Global material rows for the rasterizer; row 0 is "no material" (no specular)."""
 
     def __init__(self):
-        self.rows: List[Tuple[float, float, float, float]] = [materials.NO_SPECULAR.row()]
-        self.reflective_rows: List[bool] = [materials.NO_SPECULAR.reflective]
+        self.rows: List[Tuple[float, float, float, float]] = [materials.NO_MATERIAL.row()]
+        self.albedo_rows: List[Tuple[float, float, float]] = [materials.NO_MATERIAL.albedo]
+        self.reflective_rows: List[bool] = [materials.NO_MATERIAL.reflective]
         self.normal_map_of_row: List[int] = [-1]
         self.normal_maps: List[NormalMapRef] = []
         self._index: Dict[int, int] = {}
@@ -224,6 +228,7 @@ class MaterialTable:
                 self.normal_maps.append(nmap)
             map_index = self._map_index[ikey]
         self.rows.append(spec.row())
+        self.albedo_rows.append(spec.albedo)
         self.reflective_rows.append(spec.reflective)
         self.normal_map_of_row.append(map_index)
         self._index[key] = len(self.rows) - 1
@@ -235,6 +240,10 @@ class MaterialTable:
 
     def array(self) -> np.ndarray:
         return np.asarray(self.rows, dtype=np.float32).reshape(-1, 4)
+
+    def albedo_array(self) -> np.ndarray:
+        """[M, 3] diffuse albedo per row (the rasterizer's ``material_albedo``)."""
+        return np.asarray(self.albedo_rows, dtype=np.float32).reshape(-1, 3)
 
 
 def normal_map_pixels(ref: NormalMapRef) -> np.ndarray:
@@ -299,6 +308,7 @@ class SceneExport:
     triangles: geometry.Triangles
     materials: np.ndarray  # [M, 4]
     material_normal_map: np.ndarray  # [M] int32
+    material_albedo: Optional[np.ndarray] = None  # [M, 3]
     normal_maps: List[np.ndarray] = field(default_factory=list)
     objects: int = 0
     culled: int = 0  # outside_view + out_of_reach
@@ -385,6 +395,7 @@ def export_scene(depsgraph, progress=None, max_distance: Optional[float] = None)
     if progress is not None:
         progress.total = len(boxes) - out_of_reach
     result = SceneExport(cam, geometry.concatenate([]), table.array(), np.asarray(table.normal_map_of_row, np.int32),
+                         material_albedo=table.albedo_array(),
                          objects=len(boxes) - out_of_reach, culled=culled + out_of_reach,
                          any_reflective=any_reflective, outside_view=culled, out_of_reach=out_of_reach)
     if not any_reflective:

@@ -201,10 +201,11 @@ void bind_trace(pyb::module_& m) {
         "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
         "memory_limit_mb"_a = t.memory_limit_mb,
         "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
-        "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, 1) from trace(), the uv\n"
+        "(the G-buffer is converted once): {'uv': float32 [H, W, 4] (u, v, vis, replaced) from trace(), the uv\n"
         "of misses within 2 pixels of a hit continued from the hits; 'weight': float32 [H, W, 4], rgb\n"
         "specular_weight(), a cone_lod() continued to the misses around blurred hits (continue_lod());\n"
-        "'reflective_pixels': pixels traced; 'any_rough': some lod > 0}.\n"
+        "'reflective_pixels': pixels traced; 'any_rough': some lod > 0}. `replaced`: the share of the\n"
+        "engine's specular the pixel's reflection replaces (vis, or the hidden image's vis).\n"
         "back_albedo: optional float32 [H, W, 4], rasterize()'s back_albedo: adds 'hidden' (hidden_sides():\n"
         "(albedo x vis, vis) where a ray met an object's hidden side, whose uv then has vis 0) and\n"
         "'hidden_pixels'. Trace keywords as trace(); nothing is traced when no pixel reflects.");

@@ -197,7 +197,7 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
     return out;
   }
   out.uv = backend.trace(in, opt);
-  // Before the lod pass overwrites the trace's fourth channel, which tells
+  // Before the last pass overwrites the trace's fourth channel, which tells
   // an occluder from a hit.
   if (back_albedo) out.hidden = hidden_sides(out.uv, *back_albedo, out.hidden_pixels, threads);
   out.weight = backend.specular_weight(in.position, in.normal, spec, in.projection);
@@ -209,8 +209,6 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
       const float* s = spec.px(x, y);
       const float lod = is_reflective(s) ? cone_lod_at(x, y, spec.width, spec.height, out.uv.px(x, y), s) : 0.0f;
       out.weight.px(x, y)[3] = lod;
-      // The alpha the caller gets; continue_missing_uv() reads only uv and vis.
-      out.uv.px(x, y)[3] = 1.0f;
       any = any || lod > 0.0f;
     }
     if (any) rough.store(true, std::memory_order_relaxed);
@@ -219,12 +217,20 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   if (out.any_rough) continue_lod_into_misses(out.weight, out.uv, spec, in.position);
   continue_missing_uv(out.uv, 2, threads);
   // Until here a hidden side counted as a hit: it keeps its lod and its uv.
-  if (out.hidden_pixels) {
-    parallel_rows(0, spec.height, threads, [&](int y) {
-      for (int x = 0; x < spec.width; ++x)
-        if (out.hidden.px(x, y)[3] > 0.0f) out.uv.px(x, y)[2] = 0.0f;
-    });
-  }
+  // Now its colour leaves the uv's vis for the hidden image, and alpha says
+  // how much of the engine's specular the pixel replaces, by either.
+  const bool hidden = out.hidden_pixels > 0;
+  parallel_rows(0, spec.height, threads, [&](int y) {
+    for (int x = 0; x < spec.width; ++x) {
+      float* o = out.uv.px(x, y);
+      if (hidden && out.hidden.px(x, y)[3] > 0.0f) {
+        o[2] = 0.0f;
+        o[3] = out.hidden.px(x, y)[3];
+      } else {
+        o[3] = o[2];
+      }
+    }
+  });
   return out;
 }
 

@@ -52,18 +52,22 @@ def test_blur_levels_hold_half_their_energy_in_the_cone_footprint():
 
 # -- an independent reference of the composite (sampling and blur: compositing_reference.py)
 
-def reference_composite(base, uv, weight, lod, light, colour, bounce=False):
+def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidden=None):
     """out = base + R, R = D at the pixel's lod between Gaussian levels of D,
-    D = C W - vis S: written from the formula, not from the node list. With
-    ``bounce``, C is sampled from the frame with its first bounce, base + D."""
+    D = C W - rep S: written from the formula, not from the node list. With
+    ``bounce``, C is sampled from the frame with its first bounce, base + D.
+    ``hidden`` (albedo, vis): those pixels (vis 0 in ``uv``) show albedo x the
+    frame at the pixel, times their vis, and replace that share of S."""
     vis = uv[..., 2:3]
+    rep = vis if hidden is None else vis + hidden[..., 3:4]
+    own = 0.0 if hidden is None else hidden[..., :3] * hidden[..., 3:4] * base[..., :3]
     C = np.where(vis > 0, bilinear_clamp(base, uv[..., 0], uv[..., 1]) * vis, 0.0)
-    D = C[..., :3] * weight[..., :3] - vis * (light[..., :3] * colour[..., :3])
+    D = (C[..., :3] + own) * weight[..., :3] - rep * (light[..., :3] * colour[..., :3])
     if bounce:
         first = base.copy()
         first[..., :3] += D
         C = np.where(vis > 0, bilinear_clamp(first, uv[..., 0], uv[..., 1]) * vis, 0.0)
-        D = C[..., :3] * weight[..., :3] - vis * (light[..., :3] * colour[..., :3])
+        D = (C[..., :3] + own) * weight[..., :3] - rep * (light[..., :3] * colour[..., :3])
     R = blurred_at_lod(D, lod)
     out = base.copy()
     out[..., :3] += R
@@ -101,19 +105,21 @@ def np_map_uv(image, uv_rgba):
     return np.where(vis > 0, c, 0).astype(np.float32)
 
 
-def uv_image(uv):
+def uv_image(uv, hidden=None):
     """The uv image as glint_core.composite_layers makes it, short of the continued uv of
-    misses (which only Blender's Map UV filter reads): (u, v, vis, 1)."""
+    misses (which only Blender's Map UV filter reads): (u, v, vis, rep), rep = vis, or the
+    hidden image's vis where a ray came into a hidden side (vis 0 there)."""
     out = uv.copy()
-    out[..., 3] = 1.0
+    out[..., 3] = out[..., 2] if hidden is None else out[..., 2] + hidden[..., 3]
     return out
 
 
-def images_of(base, position, spec, uv, weight, lod, debug=None):
+def images_of(base, position, spec, uv, weight, lod, debug=None, hidden=None):
     w = weight.copy()
     w[..., 3] = lod
     h, wd = base.shape[:2]
-    return {cg.IMAGE_UV: uv_image(uv), cg.IMAGE_WEIGHT: w,
+    return {cg.IMAGE_UV: uv_image(uv, hidden), cg.IMAGE_WEIGHT: w,
+            cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
             cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec,
             **cg.coarse_images(lod, (0, 0, wd, h))}
@@ -133,6 +139,52 @@ def test_group_computes_the_composite(engine_passes):
     assert np.array_equal(out["Base"], base)
     assert np.array_equal(out["Visibility"], uv[..., 2])
     assert np.allclose(out["Engine Specular"][..., :3], light[..., :3] * colour[..., :3], atol=1e-6)
+
+
+def with_hidden_sides(uv, seed=5):
+    """A share of the hits turned into hidden sides: vis 0 in the uv, (albedo, vis) in the hidden image."""
+    rng = np.random.default_rng(seed)
+    uv = uv.copy()
+    pick = (uv[..., 2] > 0) & (rng.uniform(size=uv.shape[:2]) < 0.4)
+    hidden = np.zeros_like(uv)
+    hidden[pick, :3] = rng.uniform(0, 1, (int(pick.sum()), 3))
+    hidden[pick, 3] = uv[pick, 2]
+    uv[pick, 2] = 0
+    return uv, hidden
+
+
+@pytest.mark.parametrize("world", [False, True])
+@pytest.mark.parametrize("bounce", [False, True])
+def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bounce):
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    uv, hidden = with_hidden_sides(uv)
+    assert (hidden[..., 3] > 0).sum() > 10
+    images = images_of(base, position, spec, uv, weight, lod, hidden=hidden)
+    if world:  # S = the world colour x W (the world's path)
+        colour = weight.copy()
+        kw = dict(specular_light=light[0, 0], specular_color=weight, world_specular=True)
+        light = np.broadcast_to(light[0, 0], base.shape)
+    else:
+        kw = dict(specular_light=light, specular_color=colour)
+    out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
+    want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden)
+    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=1e-5)
+    # switched off, the hidden image is not read: the pixels only lose S
+    off = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, **kw)
+    hidden_off = hidden.copy()
+    hidden_off[..., :3] = 0
+    want_off, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden_off)
+    assert np.allclose(off["Image"][..., :3], want_off[..., :3], atol=1e-5)
+
+
+def test_a_cleared_uv_image_passes_the_frame_through_whatever_the_hidden_image_holds():
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    uv, hidden = with_hidden_sides(uv)
+    images = images_of(base, position, spec, np.zeros_like(uv), weight, lod, hidden=hidden)
+    images[cg.IMAGE_UV] = np.zeros_like(uv)  # clear_images(only_pass_through=True)
+    out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, specular_light=light, specular_color=colour,
+                            use_hidden=True)
+    assert np.array_equal(out["Image"], base)
 
 
 @pytest.mark.parametrize("engine_passes", [True, False])
@@ -257,7 +309,7 @@ def test_debug_switches():
         assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, gauss_clamp,
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
-                                               "use_bounce": False, "use_passes": True}
+                                               "use_bounce": False, "use_passes": True, "use_hidden": False}
 
 
 def test_group_matches_glint_core_for_a_mirror(core):
@@ -351,26 +403,32 @@ def confined_scene(seed):
     return base, position, spec, uv, seen, weight, lod, light, colour
 
 
-@pytest.mark.parametrize("world,bounce,blur", [(True, False, False), (True, True, True), (False, False, True),
-                                               (False, True, False)])
-def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur):
+@pytest.mark.parametrize("world,bounce,blur,hidden", [(True, False, False, True), (True, True, True, False),
+                                                      (False, False, True, True), (False, True, False, False)])
+def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur, hidden):
     """Cut to the region and placed back by the offset, the images give the frame
     the group gives from frame-sized ones, bit for bit (with the blur, to the
     float rounding of what its levels spread to the region's edge); a frame-sized input that
-    met the region untranslated would raise."""
+    met the region untranslated would raise. With hidden sides, the frame they are
+    lit by is read under the region, not at the frame's centre."""
     base, position, spec, uv, seen, weight, lod, light, colour = confined_scene(seed=7)
-    full = images_of(base, position, spec, uv, weight, lod)
-    region = cg.image_region(uv[..., 2], lod)
+    hid = None
+    if hidden:
+        uv, hid = with_hidden_sides(uv)
+        assert (hid[..., 3] > 0).sum() > 5
+    full = images_of(base, position, spec, uv, weight, lod, hidden=hid)
+    region = cg.image_region(full[cg.IMAGE_UV][..., 3], lod)
     p = cg.REGION_PAD
     # rows 17..25 grown by the pad are 9 + 2p, odd in a frame 48 high: one row more
     assert region == (19 - p, 17 - p, 33 + p, 26 + p + 1)
     assert region[0] % cg.COARSE and region[1] % cg.COARSE  # blocks on the frame's grid, not the region's
     cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region))
+    cut[cg.IMAGE_HIDDEN] = cg.region_cut(full[cg.IMAGE_HIDDEN], region)
     if world:  # the world path's inputs: a colour (an RGB node, no size) and the weight image
         kw = dict(specular_light=np.array((0.3, 0.35, 0.45, 1.0), np.float32), world_specular=True)
     else:
         kw = dict(specular_light=light, specular_color=colour)
-    kw.update(use_bounce=bounce, use_blur=blur)
+    kw.update(use_bounce=bounce, use_blur=blur, use_hidden=hidden)
     want = cg.evaluate_group(base, full, np_map_uv, gauss_clamp, **kw)
     got = cg.evaluate_group(base, cut, np_map_uv, gauss_clamp, **kw)
     assert np.abs(want["Image"] - base).max() > 0.05

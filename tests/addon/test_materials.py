@@ -196,3 +196,30 @@ def test_the_gloss_range_stays_inside_a_half_float():
 def test_glossy_is_every_finite_alpha_but_a_mirrors():
     assert m.is_glossy(0.0) and m.is_glossy(0.5) and m.is_glossy(1.5)
     assert not m.is_glossy(1.0) and not m.is_glossy(float("nan")) and not m.is_glossy(float("inf"))
+
+
+# -- the albedo a hidden side shows (docs/addon.md, *Hidden sides*)
+
+def test_principled_albedo_is_the_base_colour_neither_metal_nor_transmitted():
+    base = (0.8, 0.4, 0.2, 1.0)
+    spec = m.principled_specular({"Base Color": base, "Metallic": 0.25, "Transmission": 0.5})
+    assert spec.albedo == pytest.approx((0.8 * 0.375, 0.4 * 0.375, 0.2 * 0.375))
+    spec4 = m.principled_specular({"Base Color": base, "Specular IOR Level": 0.5, "Transmission Weight": 1.0})
+    assert spec4.albedo == (0.0, 0.0, 0.0)  # 4.x names; all transmitted
+    assert m.principled_specular({}).albedo == pytest.approx((0.8, 0.8, 0.8))  # Blender's defaults
+
+
+def test_albedo_of_other_shaders():
+    assert m.evaluate_shader({"kind": "diffuse", "color": (0.1, 0.2, 0.3, 1.0)}) == \
+        m.SpecularSpec((0.0, 0.0, 0.0), 0.0, (0.1, 0.2, 0.3))
+    assert m.evaluate_shader({"kind": "glossy", "color": (1, 1, 1), "roughness": 0.1}).albedo == (0.0, 0.0, 0.0)
+    assert m.evaluate_shader({"kind": "specular", "color": (0.04, 0.04, 0.04), "roughness": 0.3,
+                              "base_color": (0.5, 0.6, 0.7, 1.0)}).albedo == pytest.approx((0.5, 0.6, 0.7))
+    mix = m.evaluate_shader({"kind": "mix", "fac": 0.25, "a": {"kind": "diffuse", "color": (1.0, 0.0, 0.0)},
+                             "b": {"kind": "glossy", "color": (1, 1, 1), "roughness": 0.0}})
+    assert mix.albedo == pytest.approx((0.75, 0.0, 0.0))
+    view = m.evaluate_shader({"kind": "viewport", "diffuse_color": (0.5, 0.5, 1.0, 1.0), "metallic": 0.5})
+    assert view.albedo == pytest.approx((0.25, 0.25, 0.5))
+    assert m.material_spec({"kind": "diffuse", "color": (0.3, 0.3, 0.3)}, hardness=100).albedo == \
+        pytest.approx((0.3, 0.3, 0.3))  # a hardness override keeps it
+    assert m.NO_MATERIAL.albedo == (0.8, 0.8, 0.8) and not m.NO_MATERIAL.reflective

@@ -157,7 +157,7 @@ def test_layers_are_the_separate_calls_in_one(rough_floor, backend, request):
     layers = glint_core.composite_layers(gb["position"], gb["normal"], spec, proj, **kw)
     uv = glint_core.trace(gb["position"], gb["normal"], proj, specular=spec, **kw)
     want_uv = continued_reference(uv, 2)
-    want_uv[..., 3] = 1
+    want_uv[..., 3] = want_uv[..., 2]  # no hidden side: the share replaced is vis
     assert np.array_equal(layers["uv"], want_uv)
     weight = glint_core.specular_weight(gb["position"], gb["normal"], spec, proj, backend=backend)
     assert np.array_equal(layers["weight"][..., :3], weight[..., :3])
@@ -251,6 +251,7 @@ def test_layers_show_hidden_sides_in_place_of_the_occluder(backend, request):
     assert layers["hidden_pixels"] == hidden.sum() > 50
     assert np.array_equal(layers["hidden"], want)
     assert np.array_equal(layers["uv"][hidden, 2], np.zeros(hidden.sum(), np.float32))
+    assert np.array_equal(layers["uv"][hidden, 3], want[hidden, 3])  # what they replace
     assert np.array_equal(layers["uv"][~hidden], plain["uv"][~hidden])
     assert np.array_equal(layers["uv"][hidden, :2], plain["uv"][hidden, :2])
     assert np.array_equal(layers["weight"], plain["weight"])

@@ -6,20 +6,31 @@ comes from, not its colour; the compositor, after the render, has the colour.
 So the core computes everything that does not depend on colour and hands the
 compositor two images:
 
-    UV image     = (u, v, vis, 1)      Map UV samples the frame at (u, v) and
+    UV image     = (u, v, vis, rep)    Map UV samples the frame at (u, v) and
                                        premultiplies by vis (the trace's hit
-                                       confidence x the screen-edge fade)
+                                       confidence x the screen-edge fade); rep:
+                                       the share of the engine's specular the
+                                       pixel replaces (vis, or a hidden side's)
     weight image = (W.r, W.g, W.b, lod)
                    W = F0 * A + B, the split-sum weight of the pixel's specular
                    lobe (glint_core.specular_weight: Fresnel and roughness at
                    the real view angle); lod = glint_core.cone_lod, the
                    footprint of the reflection cone as log2 of pixels
 
+and, with *Fill Hidden Reflections*, a third:
+
+    hidden image = (albedo, vis)       where the pixel's ray came into an object
+                                       by its hidden side: that side's material
+                                       colour, the ray's vis there (the UV
+                                       image's vis is then 0 and rep this vis)
+
 and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
 
-    C   = frame(u, v) * vis                             the reflected colour
+    C   = frame(u, v) * vis + rep * albedo * frame      the reflected colour: a
+                                                        hidden side lit by what
+                                                        reflects it (below)
     S   = Specular Light * Specular Color               the engine's own specular
-    D   = C * W - vis * S                               what changes: the engine's
+    D   = C * W - rep * S                               what changes: the engine's
                                                         specular out where a hit
                                                         replaces it, the reflection in
     D2  = D + W * vis * D(u, v)                         the second bounce (below)
@@ -64,6 +75,18 @@ mix(mix(mix(D, B1, s1), B2, s2), ...) equals mix(mix(D, B1, s1), Q, s2) with Q
 the coarse mix of B2..B4: exact up to the block's lod standing for its pixels'.
 The blocks lie on the frame's grid, so a region's coarse canvas is part of the
 frame's. Measured in docs/addon.md (*The coarse levels*).
+
+Hidden sides: a ray that comes into an object by the side the camera does not
+see (a floor's ray meeting a sphere's underside) has no pixel of the frame to
+show. The back layer says which surface it is, the material table its albedo;
+its light is guessed as what reflects it: the surface faces the reflector it is
+seen in (the floor under the sphere), so what lights it is that reflector's
+own radiance, the frame at the pixel itself. Albedo x frame is then the diffuse
+light of a surface that sees nothing but the reflector, its colour right next
+to a contact and too bright where the reflector is far or small (docs/addon.md,
+*Hidden sides*). The term is gated by rep, so a cleared UV image (rep 0) passes
+the frame through whatever the hidden image holds. A Switch (``use_hidden``)
+leaves its three nodes out when *Fill Hidden Reflections* is off.
 
 The second bounce: a mirror that reflects another mirror shows that mirror as
 the engine rendered it, without its reflection. Sampling the frame *with* the
@@ -116,10 +139,11 @@ IMAGE_SPECULAR = "Glint Specular"
 IMAGE_OFFSET = "Glint Offset"  # 1x1: where the region's images go in the frame (:func:`region_offset`)
 IMAGE_COARSE = "Glint Coarse"  # the coarse canvas of the wide blur levels (:func:`coarse_images`)
 IMAGE_FINE = "Glint Fine"      # where each region pixel reads the coarse canvas
+IMAGE_HIDDEN = "Glint Hidden"  # (albedo, vis) of the hidden sides rays come into (composite_layers)
 ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR, IMAGE_OFFSET,
-              IMAGE_COARSE, IMAGE_FINE)
+              IMAGE_COARSE, IMAGE_FINE, IMAGE_HIDDEN)
 # The images cut to the frame's region (the others stay frame-sized).
-REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE)
+REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE, IMAGE_HIDDEN)
 # The one image whose zeros make the group pass the frame through (vis = 0:
 # C = 0 and D = 0): what a frame Glint does not handle clears.
 PASS_THROUGH_IMAGE = IMAGE_UV
@@ -250,6 +274,13 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "delta_to_frame": _translate(),
     "specular_to_region": _translate(-1),
     "sep_weight": _separate(),  # the weight image's alpha: the pixel's lod
+    # Hidden sides: C + rep * albedo * frame (see "Hidden sides" above); the
+    # frame-sized frame read on the region (the hidden image first sizes it).
+    "hidden_image": ("image", {"image": IMAGE_HIDDEN}, {}),
+    "frame_to_region": _translate(-1),
+    "hidden_colour": _mix("MULTIPLY", {0: 1.0}),   # albedo * frame
+    "with_hidden": _mix("ADD"),                    # C + rep * albedo * frame
+    "use_hidden": ("switch", {"on": True}, {}),
     # D on a frame-sized canvas, 0 x frame + 1 x D: what the second Map UV
     # samples (it scales uv by its image's size).
     "bounce_source": _mix("MIX", {0: 1.0}),
@@ -264,11 +295,11 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "finite_g": _math("MAXIMUM", False, {1: 0.0}),
     "finite_b": _math("MAXIMUM", False, {1: 0.0}),
     "finite_specular": ("combine", {}, {3: 1.0}),
-    "delta": _mix("SUBTRACT"),                      # C * W - vis * S
+    "delta": _mix("SUBTRACT"),                      # C * W - rep * S
     # Under a uniform world S = colour x W: D = W (C - vis colour), two nodes
     # where the passes' path takes eight (the compositor runs each on every pixel).
-    "world_replaced": _mix("SUBTRACT"),             # C - vis * colour
-    "world_delta": _mix("MULTIPLY", {0: 1.0}),      # W (C - vis * colour)
+    "world_replaced": _mix("SUBTRACT"),             # C - rep * colour
+    "world_delta": _mix("MULTIPLY", {0: 1.0}),      # W (C - rep * colour)
     "use_passes": ("switch", {"on": True}, {}),
     "bounce_map_uv": ("map_uv", {}, {}),  # vis * D(u, v)
     "bounce_weighted": _mix("MULTIPLY", {0: 1.0}),  # W * vis * D(u, v)
@@ -318,7 +349,16 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("weight_image", 0, "sep_weight", 0),
     ("sep_offset", 0, "offset_back_x", 0),
     ("sep_offset", 1, "offset_back_y", 0),
-    ("map_uv", 0, "weighted", 1),
+    (GROUP_IN, 0, "frame_to_region", 0),
+    ("hidden_image", 0, "hidden_colour", 1),
+    ("frame_to_region", 0, "hidden_colour", 2),
+    ("sep_uv", 3, "with_hidden", 0),
+    ("map_uv", 0, "with_hidden", 1),
+    ("hidden_colour", 0, "with_hidden", 2),
+    # input 0 when off: C alone, the hidden sides' nodes not run
+    ("map_uv", 0, "use_hidden", 0),
+    ("with_hidden", 0, "use_hidden", 1),
+    ("use_hidden", 0, "weighted", 1),
     ("weight_image", 0, "weighted", 2),
     (GROUP_IN, 1, "engine_specular", 1),
     (GROUP_IN, 2, "engine_specular", 2),
@@ -332,12 +372,12 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     # the passes' path: the frame-sized S is read on the region (C * W first,
     # so the region sizes the operation)
     ("finite_specular", 0, "specular_to_region", 0),
-    ("sep_uv", 2, "delta", 0),
+    ("sep_uv", 3, "delta", 0),
     ("weighted", 0, "delta", 1),
     ("specular_to_region", 0, "delta", 2),
     # the world's path
-    ("sep_uv", 2, "world_replaced", 0),
-    ("map_uv", 0, "world_replaced", 1),
+    ("sep_uv", 3, "world_replaced", 0),
+    ("use_hidden", 0, "world_replaced", 1),
     (GROUP_IN, 1, "world_replaced", 2),
     ("world_replaced", 0, "world_delta", 1),
     ("weight_image", 0, "world_delta", 2),
@@ -430,13 +470,15 @@ EXR_LAYERS = (
 
 
 def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False,
-                  world_specular: bool = False) -> Dict[str, bool]:
+                  world_specular: bool = False, use_hidden: bool = False) -> Dict[str, bool]:
     """The Switch nodes' ``check`` for a debug view, whether any reflective
-    surface in the frame is rough, whether the second bounce runs, and whether
+    surface in the frame is rough, whether the second bounce runs, whether
     S is the world colour (Specular Light) times W (``world_specular``: the
-    group's Specular Color input is then not read)."""
+    group's Specular Color input is then not read) and whether hidden sides are
+    shown (``use_hidden``: the add-on then fills the hidden image every frame)."""
     return {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
-            "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular}
+            "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
+            "use_hidden": bool(use_hidden)}
 
 
 # The second bounce setting: enum value -> (label, description).
@@ -489,14 +531,15 @@ def use_second_bounce(mode: str, reflective_objects: int) -> bool:
 REGION_PAD = 2 * COARSE
 
 
-def image_region(vis: np.ndarray, lod: np.ndarray, pad: int = REGION_PAD) -> Tuple[int, int, int, int]:
+def image_region(replaced: np.ndarray, lod: np.ndarray, pad: int = REGION_PAD) -> Tuple[int, int, int, int]:
     """(x0, y0, x1, y1), the pixel rows and columns [y0, y1) x [x0, x1) outside
-    which the group leaves the frame as it is: the bounding box of the hits
-    (vis > 0; D = 0 elsewhere) and of the pixels that take a blurred D
+    which the group leaves the frame as it is: the bounding box of the pixels
+    whose reflection replaces something (the UV image's rep > 0: a hit or a
+    hidden side; D = 0 elsewhere) and of the pixels that take a blurred D
     (lod > 0), grown by ``pad`` and cut to the frame. No such pixel: one pixel,
-    whose vis 0 changes nothing."""
-    h, w = np.shape(vis)[:2]
-    touched = np.asarray(vis) > 0
+    whose rep 0 changes nothing."""
+    h, w = np.shape(replaced)[:2]
+    touched = np.asarray(replaced) > 0
     touched |= np.asarray(lod) > 0
     rows = np.flatnonzero(touched.any(axis=1))
     if rows.size == 0:
@@ -528,6 +571,18 @@ def region_offset(region: Tuple[int, int, int, int], width: int, height: int) ->
     Tiled and Full Frame, 4.3 and 5.2)."""
     x0, y0, x1, y1 = region
     return x0 + (x1 - x0) / 2.0 - width / 2.0, y0 + (y1 - y0) / 2.0 - height / 2.0
+
+
+def region_cut(image: np.ndarray, region: Tuple[int, int, int, int]) -> np.ndarray:
+    """A frame-sized image's pixels in ``region`` (a view)."""
+    x0, y0, x1, y1 = region
+    return image[y0:y1, x0:x1]
+
+
+def region_zeros(region: Tuple[int, int, int, int]) -> np.ndarray:
+    """A region-sized image of zeros: the hidden image of a frame without hidden sides."""
+    x0, y0, x1, y1 = region
+    return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
 
 
 def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int]) -> Dict[str, np.ndarray]:
@@ -695,7 +750,8 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    blur: Callable[[np.ndarray, float], np.ndarray],
                    specular_light: Optional[np.ndarray] = None, specular_color: Optional[np.ndarray] = None,
                    debug_view: str = "NONE", use_blur: bool = True,
-                   use_bounce: bool = False, world_specular: bool = False) -> Dict[str, np.ndarray]:
+                   use_bounce: bool = False, world_specular: bool = False,
+                   use_hidden: bool = False) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
 
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
@@ -719,7 +775,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     for src, so, dst, di in GROUP_LINKS:
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
-    switches = switch_states(debug_view, use_blur, use_bounce, world_specular)
+    switches = switch_states(debug_view, use_blur, use_bounce, world_specular, use_hidden)
 
     def inp(node, index):
         link = incoming.get((node, index))

@@ -16,6 +16,11 @@ numbers from what a material does have:
   viewport display values (``specular_color``, ``specular_intensity``,
   ``roughness``, ``metallic``, ``diffuse_color``), read as a Principled BSDF.
 
+Each row also carries the material's diffuse *albedo* (its base colour where it
+is not metal), which the rasterizer reports for the back-face layer: a reflected
+ray that comes into an object by the side the camera does not see shows that
+side in this colour (docs/addon.md, *Hidden sides*).
+
 A shader is described by plain dicts (built in Blender by ``gather.py``), so the
 rule is tested here without Blender:
 
@@ -23,7 +28,8 @@ rule is tested here without Blender:
     {"kind": "glossy", "color": (r, g, b), "roughness": r}
     {"kind": "specular", "color": (r, g, b), "roughness": r}   # Eevee's Specular BSDF
     {"kind": "glass", "ior": 1.45, "roughness": r}
-    {"kind": "none"}                                          # diffuse, emission, ...
+    {"kind": "diffuse", "color": (r, g, b)}                   # Diffuse BSDF: no specular
+    {"kind": "none"}                                          # emission, ...
     {"kind": "mix", "fac": f, "a": <desc>, "b": <desc>}
     {"kind": "add", "a": <desc>, "b": <desc>}
     {"kind": "viewport", "specular_color": ..., "specular_intensity": ...,
@@ -59,6 +65,7 @@ class SpecularSpec:
 
     color: RGB  # specular colour, linear, each in [0, 1]
     shininess: float  # the book's units, 0..127.75, above it the gloss range
+    albedo: RGB = (0.0, 0.0, 0.0)  # diffuse colour, linear, each in [0, 1]
 
     @property
     def amount(self) -> float:
@@ -83,6 +90,9 @@ class SpecularSpec:
 
 
 NO_SPECULAR = SpecularSpec((0.0, 0.0, 0.0), 0.0)
+# An object without a material: Blender shades it a plain grey (0.8) dielectric
+# in every engine, which Glint treats as not reflective.
+NO_MATERIAL = SpecularSpec((0.0, 0.0, 0.0), 0.0, (0.8, 0.8, 0.8))
 
 
 def _clamp(v: float, lo: float, hi: float) -> float:
@@ -215,7 +225,11 @@ def principled_specular(inputs: Mapping[str, object]) -> SpecularSpec:
         tinted = _mix((1.0, 1.0, 1.0), _tint_colour(base), _clamp(float(tint_amount), 0.0, 1.0))
         dielectric = (f0 * tinted[0], f0 * tinted[1], f0 * tinted[2])
     color = _clamp_rgb(_mix(dielectric, base, metallic))
-    return SpecularSpec(color, shininess_from_roughness(roughness))
+    # What is neither metal nor transmitted is diffuse (3.x: Transmission, 4.x: Transmission Weight).
+    transmission = _clamp(float(inputs.get("Transmission Weight", inputs.get("Transmission", 0.0))), 0.0, 1.0)
+    diffuse = (1.0 - metallic) * (1.0 - transmission)
+    albedo = (base[0] * diffuse, base[1] * diffuse, base[2] * diffuse)
+    return SpecularSpec(color, shininess_from_roughness(roughness), albedo)
 
 
 def viewport_specular(desc: Mapping[str, object]) -> SpecularSpec:
@@ -227,7 +241,8 @@ def viewport_specular(desc: Mapping[str, object]) -> SpecularSpec:
     f0 = PRINCIPLED_3X_F0_PER_SPECULAR * intensity
     dielectric = (f0 * spec_colour[0], f0 * spec_colour[1], f0 * spec_colour[2])
     color = _clamp_rgb(_mix(dielectric, base, metallic))
-    return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.4))))
+    albedo = (base[0] * (1.0 - metallic), base[1] * (1.0 - metallic), base[2] * (1.0 - metallic))
+    return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.4))), albedo)
 
 
 def ggx_alpha_from_shininess(shininess: float) -> float:
@@ -242,17 +257,18 @@ def ggx_alpha_from_shininess(shininess: float) -> float:
 def _combine(a: SpecularSpec, wa: float, b: SpecularSpec, wb: float) -> SpecularSpec:
     """Weighted sum of two lobes; their GGX widths averaged by each lobe's
     reflected amount (in width, not shininess, which runs the other way past a
-    mirror's 127.75 in the gloss range)."""
+    mirror's 127.75 in the gloss range). The albedos add with the same weights."""
     color = _clamp_rgb(tuple(a.color[i] * wa + b.color[i] * wb for i in range(3)))
+    albedo = _clamp_rgb(tuple(a.albedo[i] * wa + b.albedo[i] * wb for i in range(3)))
     ka, kb = a.amount * wa, b.amount * wb
     if ka + kb <= 0.0:
-        return SpecularSpec(color, 0.0)
+        return SpecularSpec(color, 0.0, albedo)
     if kb <= 0.0 or a.shininess == b.shininess:  # one lobe, kept exactly
-        return SpecularSpec(color, a.shininess)
+        return SpecularSpec(color, a.shininess, albedo)
     if ka <= 0.0:
-        return SpecularSpec(color, b.shininess)
+        return SpecularSpec(color, b.shininess, albedo)
     width = (ggx_alpha_from_shininess(a.shininess) * ka + ggx_alpha_from_shininess(b.shininess) * kb) / (ka + kb)
-    return SpecularSpec(color, shininess_from_roughness(math.sqrt(width)))
+    return SpecularSpec(color, shininess_from_roughness(math.sqrt(width)), albedo)
 
 
 _MAX_DEPTH = 32  # node graphs are DAGs, but a hand-made description could loop
@@ -267,7 +283,10 @@ def evaluate_shader(desc: Optional[Mapping[str, object]], _depth: int = 0) -> Sp
         return principled_specular(desc.get("inputs", {}))
     if kind in ("glossy", "specular", "anisotropic"):
         color = _clamp_rgb(_rgb(desc.get("color"), (1.0, 1.0, 1.0)))
-        return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.5))))
+        albedo = _clamp_rgb(_rgb(desc.get("base_color"), (0.0, 0.0, 0.0)))  # Eevee's Specular BSDF has one
+        return SpecularSpec(color, shininess_from_roughness(float(desc.get("roughness", 0.5))), albedo)
+    if kind == "diffuse":
+        return SpecularSpec((0.0, 0.0, 0.0), 0.0, _clamp_rgb(_rgb(desc.get("color"), (0.8, 0.8, 0.8))))
     if kind == "glass":
         f0 = f0_from_ior(float(desc.get("ior", 1.45)))
         return SpecularSpec((f0, f0, f0), shininess_from_roughness(float(desc.get("roughness", 0.0))))
@@ -291,5 +310,5 @@ def material_spec(desc: Optional[Mapping[str, object]], hardness: Optional[float
     """The full rule: the shader's spec, with a custom ``hardness`` overriding shininess."""
     spec = evaluate_shader(desc)
     if hardness is not None:
-        spec = SpecularSpec(spec.color, shininess_from_hardness(float(hardness)))
+        spec = SpecularSpec(spec.color, shininess_from_hardness(float(hardness)), spec.albedo)
     return spec

@@ -119,7 +119,14 @@ def look_kwargs(values: Mapping[str, object]) -> Dict[str, str]:
     the object in front, as Eevee's SSR does, instead of the engine's reflection of the
     world (docs/addon.md, "Hidden reflections"). Not for measuring accuracy: an
     occluder is not the hit."""
-    return {"blocked": "occluder" if values.get("fill_hidden", True) else "miss"}
+    return {"blocked": "occluder" if shows_hidden_sides(values) else "miss"}
+
+
+def shows_hidden_sides(values: Mapping[str, object]) -> bool:
+    """Whether a ray that comes into an object by its hidden side shows that side
+    in its material's colour (the compositor's hidden image; docs/addon.md,
+    *Hidden sides*): with ``fill_hidden``, where the march reads the back layer."""
+    return bool(values.get("fill_hidden", True))
 
 
 def backend_name(enum_value: str) -> str:

@@ -11,8 +11,10 @@
 namespace glint {
 
 struct CompositeLayers {
-  // (u, v, vis, 1): the trace, with the uv of misses next to hits continued
-  // from those hits (continue_missing_uv), alpha 1.
+  // (u, v, vis, replaced): the trace, with the uv of misses next to hits
+  // continued from those hits (continue_missing_uv). `replaced` is the share
+  // of the engine's own specular the pixel's reflection replaces: vis, or at
+  // a hidden side (below) the hidden image's vis.
   Image uv;
   // rgb: the split-sum weight (Backend::specular_weight), a: the cone blur's
   // level (cone_lod_at) at hits, continued to the misses around them
