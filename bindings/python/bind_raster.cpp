@@ -1,5 +1,6 @@
-// glint_core.rasterize: G-buffers (position, normal, specular) from a
-// view-space triangle soup, on the CPU reference or the GL backend.
+// glint_core.rasterize: G-buffers (position, normal, specular, and the
+// back-face layer with its albedo) from a view-space triangle soup, on the
+// CPU reference or the GL backend.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -84,8 +85,12 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                        const pyb::handle& material_index, const pyb::handle& materials,
                        const pyb::handle& projection, int width, int height, const pyb::handle& uvs,
                        const pyb::handle& tangents, const pyb::handle& material_normal_map,
-                       const pyb::handle& normal_maps, bool back_layer, const std::string& backend,
-                       int threads, double memory_limit_mb) {
+                       const pyb::handle& normal_maps, bool back_layer,
+                       const pyb::handle& material_albedo, const std::string& backend, int threads,
+                       double memory_limit_mb) {
+  const bool back_albedo = !material_albedo.is_none();
+  // Before anything is allocated: the albedo only exists for the back layer.
+  if (back_albedo && !back_layer) throw InvalidArgument("material_albedo", "needs back_layer=True");
   // Before any copy: the triangles' copies (positions, normals, index, uvs,
   // tangents: 4 * (9 + 9 + 1 + 6 + 12) bytes each) and the backend's own
   // buffers, whose images become the output arrays.
@@ -95,7 +100,8 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
       const auto a = pyb::reinterpret_borrow<pyb::array>(positions);
       if (a.ndim() >= 1) tris = static_cast<uint64_t>(a.shape(0));
     }
-    require_memory(tris * 4 * 37 + raster_bytes(width, height, tris, back_layer, backend != "cpu"),
+    require_memory(tris * 4 * 37 + raster_bytes(width, height, tris, back_layer, back_albedo,
+                                                backend != "cpu"),
                    "rasterize at " + std::to_string(width) + "x" + std::to_string(height),
                    memory_limit_mb);
   }
@@ -138,6 +144,20 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
                                 " (the rows of materials), got (" + std::to_string(maps.size()) + ",)");
     for (size_t k = 0; k < maps.size(); ++k) table[k].normal_map = maps[k];
   }
+  if (back_albedo) {
+    // Small like the material table: float64 is accepted too. Finite and
+    // >= 0 is checked by validate(), with the row.
+    pyb::array alb = require_array(material_albedo, "material_albedo");
+    if (!alb.dtype().is(pyb::dtype::of<float>()) && !alb.dtype().is(pyb::dtype::of<double>()))
+      throw InvalidArgument("material_albedo", "expected dtype float32 or float64, got " +
+                                                   pyb::str(alb.dtype()).cast<std::string>());
+    const std::string expected =
+        "(M, 3) = (albedo r, g, b) with M = " + std::to_string(table.size()) + " (the rows of materials)";
+    require_shape(alb, "material_albedo", {static_cast<pyb::ssize_t>(table.size()), 3}, expected.c_str());
+    auto values = pyb::array_t<float, pyb::array::c_style | pyb::array::forcecast>::ensure(alb);
+    for (size_t k = 0; k < table.size(); ++k)
+      for (int c = 0; c < 3; ++c) table[k].albedo[c] = values.data()[3 * k + c];
+  }
 
   std::vector<Image> images;
   if (!pyb::isinstance<pyb::sequence>(normal_maps) || pyb::isinstance<pyb::array>(normal_maps) ||
@@ -152,6 +172,7 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
   const Mat4 proj = projection_from_array(projection);
   RasterInputs in{mesh, table, images, proj, width, height};
   in.back_layer = back_layer;
+  in.back_albedo = back_albedo;
   in.memory_limit_mb = memory_limit_mb;
   validate(in);
   auto be = get_backend(backend, threads);
@@ -165,6 +186,7 @@ pyb::dict py_rasterize(const pyb::handle& positions, const pyb::handle& normals,
   out["normal"] = array_from_image(std::move(g.normal));
   out["specular"] = array_from_image(std::move(g.specular));
   if (back_layer) out["back_position"] = array_from_image(std::move(g.back_position));
+  if (back_albedo) out["back_albedo"] = array_from_image(std::move(g.back_albedo));
   return out;
 }
 
@@ -174,7 +196,8 @@ void bind_raster(pyb::module_& m) {
   m.def("rasterize", &py_rasterize, "positions"_a, "normals"_a, "material_index"_a, "materials"_a,
         "projection"_a, "width"_a, "height"_a, pyb::kw_only(), "uvs"_a = pyb::none(),
         "tangents"_a = pyb::none(), "material_normal_map"_a = pyb::none(),
-        "normal_maps"_a = pyb::tuple(), "back_layer"_a = false, "backend"_a = schema::backend.initial_name,
+        "normal_maps"_a = pyb::tuple(), "back_layer"_a = false, "material_albedo"_a = pyb::none(),
+        "backend"_a = schema::backend.initial_name,
         "threads"_a = schema::threads.initial_int(),
         "memory_limit_mb"_a = 0.0,
         "G-buffers from view-space triangles (Blender camera space, -Z forward).\n"
@@ -184,7 +207,11 @@ void bind_raster(pyb::module_& m) {
         "(-1 = none) and normal_maps (float32 (h, w, 3|4) images) for tangent-space normal maps.\n"
         "Returns dict(position, normal, specular) of float32 (height, width, 4), plus\n"
         "back_position with back_layer=True: the nearest back-facing surface behind each\n"
-        "pixel's own (w = 0 where none), for trace(back_position=...). Row 0 at the bottom;\n"
+        "pixel's own (w = 0 where none), for trace(back_position=...).\n"
+        "material_albedo: float32/float64 (M, 3) diffuse albedo per material (finite, >= 0),\n"
+        "only with back_layer=True; adds back_albedo = (albedo r, g, b of that back surface's\n"
+        "material, 1) where back_position is set, zeros elsewhere, to shade a reflection that\n"
+        "meets an object's hidden side with its own colour. Row 0 at the bottom;\n"
         "pixels no triangle covers are all zeros. Triangles with a non-finite corner are skipped.\n"
         "memory_limit_mb: as for trace(); a request over it raises MemoryLimitExceeded.");
 }

@@ -104,16 +104,19 @@ uint64_t pipeline_bytes(int width, int height, const PipelineOptions& opt, bool 
   return trace_bytes(width, height, opt.trace.march, gl) + p * stages;
 }
 
-uint64_t raster_bytes(int width, int height, uint64_t triangles, bool back_layer, bool gl) {
+uint64_t raster_bytes(int width, int height, uint64_t triangles, bool back_layer, bool back_albedo,
+                      bool gl) {
   const uint64_t p = static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
   // CPU: a double depth and an int32 winner per pixel, then three RGBA images;
-  // the back layer repeats depth and winner and adds one image. Per triangle:
-  // its screen set-up and band bins (clipping can split one into several).
+  // the back layer repeats depth and winner and adds one image, its albedo
+  // one more. Per triangle: its screen set-up and band bins (clipping can
+  // split one into several).
   // GL: three RGBA32F targets and a depth buffer, their read-back, and the
-  // vertex buffers.
+  // vertex buffers; the back layer's albedo is a target and a read-back.
   const uint64_t front = gl ? 3 * kImage + 4 + 3 * kImage : 8 + 4 + 3 * kImage;
   const uint64_t back = back_layer ? (gl ? kImage + 4 + kImage : 8 + 4 + kImage) : 0;
-  return p * (front + back) + triangles * 256;
+  const uint64_t albedo = back_albedo ? (gl ? 2 * kImage : kImage) : 0;
+  return p * (front + back + albedo) + triangles * 256;
 }
 
 uint64_t exr_read_bytes(int64_t width, int64_t height, uint64_t layers) {
@@ -133,7 +136,8 @@ void require_trace_memory(const TraceInputs& in, const TraceOptions& opt, bool g
 }
 
 void require_raster_memory(const RasterInputs& in, bool gl) {
-  require_memory(raster_bytes(in.width, in.height, in.mesh.triangle_count(), in.back_layer, gl),
+  require_memory(raster_bytes(in.width, in.height, in.mesh.triangle_count(), in.back_layer,
+                              in.back_albedo, gl),
                  "rasterize at " + size_of(in.width, in.height), in.memory_limit_mb);
 }
 

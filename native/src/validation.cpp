@@ -105,6 +105,8 @@ void validate(const RasterInputs& in) {
     throw InvalidArgument("height", "expected 1.." + std::to_string(kMaxImageSide) + ", got " +
                                         std::to_string(in.height));
   validate_projection(in.projection);
+  if (in.back_albedo && !in.back_layer)
+    throw InvalidArgument("back_albedo", "needs back_layer: it is the back layer's material");
 
   const Mesh& mesh = in.mesh;
   const size_t t = mesh.triangle_count();
@@ -128,6 +130,11 @@ void validate(const RasterInputs& in) {
       if (!std::isfinite(x))
         throw InvalidArgument("materials", "expected finite values, row " + std::to_string(k) +
                                                " has " + std::to_string(x));
+    }
+    for (float x : mat.albedo) {
+      if (!std::isfinite(x) || x < 0.0f)
+        throw InvalidArgument("material_albedo", "expected finite values >= 0, row " +
+                                                     std::to_string(k) + " has " + std::to_string(x));
     }
     if (mat.normal_map < -1 || mat.normal_map >= static_cast<int>(maps))
       throw InvalidArgument("material_normal_map",

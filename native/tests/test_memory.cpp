@@ -97,8 +97,11 @@ TEST(MemoryEstimates, CoverTheOutputs) {
     EXPECT_GE(trace_bytes(kSide, kSide, m.id, false), 16 * kPixels) << m.name;
     EXPECT_GE(trace_bytes(kSide, kSide, m.id, true), 16 * kPixels) << m.name;
   }
-  EXPECT_GE(raster_bytes(kSide, kSide, 0, false, false), 3 * 16 * kPixels);
-  EXPECT_GE(raster_bytes(kSide, kSide, 0, true, false), 4 * 16 * kPixels);
+  EXPECT_GE(raster_bytes(kSide, kSide, 0, false, false, false), 3 * 16 * kPixels);
+  EXPECT_GE(raster_bytes(kSide, kSide, 0, true, false, false), 4 * 16 * kPixels);
+  EXPECT_GE(raster_bytes(kSide, kSide, 0, true, true, false), 5 * 16 * kPixels);
+  EXPECT_GE(raster_bytes(kSide, kSide, 0, true, true, true), 5 * 16 * kPixels);
+  EXPECT_GT(raster_bytes(kSide, kSide, 0, true, true, true), raster_bytes(kSide, kSide, 0, true, false, true));
   EXPECT_GE(pipeline_bytes(kSide, kSide, PipelineOptions{}, false), 5 * 16 * kPixels);
   EXPECT_GE(exr_read_bytes(kSide, kSide, 3), 3 * 16 * kPixels);
 }

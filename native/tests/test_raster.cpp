@@ -104,6 +104,30 @@ std::vector<Tri> quad(double x0, double y0, double x1, double y1, double z, bool
   return {flat(a, b, c, n, mat), flat(a, c, d, n, mat)};
 }
 
+// A closed axis-aligned box, every face wound counter-clockwise seen from
+// outside (so its far side is back-facing from any eye outside it).
+std::vector<Tri> box(const double lo[3], const double hi[3], int mat) {
+  std::vector<Tri> tris;
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      double q[4][3];
+      const double bc[4][2] = {{lo[b], lo[c]}, {hi[b], lo[c]}, {hi[b], hi[c]}, {lo[b], hi[c]}};
+      for (int k = 0; k < 4; ++k) {
+        // e_b x e_c = e_a: this order faces +a; the -a face walks it backwards.
+        const int from = side ? k : 3 - k;
+        q[k][a] = side ? hi[a] : lo[a];
+        q[k][b] = bc[from][0];
+        q[k][c] = bc[from][1];
+      }
+      double n[3] = {0, 0, 0};
+      n[a] = side ? 1.0 : -1.0;
+      tris.push_back(flat(q[0], q[1], q[2], n, mat));
+      tris.push_back(flat(q[0], q[2], q[3], n, mat));
+    }
+  return tris;
+}
+
 void expect_rect(const Image& pos, int i0, int i1, int j0, int j1) {
   for (int y = 0; y < pos.height; ++y)
     for (int x = 0; x < pos.width; ++x) {
@@ -535,10 +559,13 @@ TEST(Raster, MoreTrianglesThanOneChunkKeepBothLayers) {
   for (const auto& part : {quad(-2, -2, 2, 2, -5.0, false, 1), quad(-2, -2, 2, 2, -8.0, true, 1)})
     tris.insert(tris.end(), part.begin(), part.end());
   const Mesh mesh = make_mesh(tris);
-  const auto mats = default_materials();
+  auto mats = default_materials();
+  mats[0].albedo[0] = 0.5f;
+  mats[1].albedo[1] = 0.75f;
   const std::vector<Image> maps;
   RasterInputs in{mesh, mats, maps, square_perspective(), w, h};
   in.back_layer = true;
+  in.back_albedo = true;
   const GBufferImages g = cpu::rasterize(in, 2);
 
   int checked = 0;
@@ -559,9 +586,101 @@ TEST(Raster, MoreTrianglesThanOneChunkKeepBothLayers) {
       const float* q = g.back_position.px(x, y);
       ASSERT_EQ(q[3], back != 0.0 ? 1.0f : 0.0f) << x << "," << y;
       if (back != 0.0) ASSERT_NEAR(q[2], back, 1e-5 * -back) << x << "," << y;
+      // The slab's back face is material 1, the wall's back face material 0.
+      const float* al = g.back_albedo.px(x, y);
+      ASSERT_EQ(al[0], back == -12.0 ? 0.5f : 0.0f) << x << "," << y;
+      ASSERT_EQ(al[1], back == -8.0 ? 0.75f : 0.0f) << x << "," << y;
+      ASSERT_EQ(al[3], q[3]) << x << "," << y;
       ++checked;
     }
   EXPECT_GT(checked, w * h / 2);
+}
+
+// back_albedo is the albedo of the back-layer triangle's material: a small
+// box (material 0) in front of a larger one (material 1) in front of an open
+// wall (material 1, front-facing, so no back layer where it is the front).
+// Under the square 90-degree camera a point (x, y, z) is seen at ndc
+// (x / -z, y / -z): the small box covers max(|nx|, |ny|) < 0.5 / 3, the large
+// one < 2 / 6; the small box's far face (z = -4) shows within 0.5 / 4, the
+// large one's (z = -9) within 2 / 9 where the small box does not hide it.
+TEST(Raster, BackAlbedoIsTheMaterialOfTheBackLayersTriangle) {
+  const int w = 64, h = 64;
+  const double big_lo[3] = {-2, -2, -9}, big_hi[3] = {2, 2, -6};
+  const double small_lo[3] = {-0.5, -0.5, -4}, small_hi[3] = {0.5, 0.5, -3};
+  // The far box first: which layer wins is the depth's doing, not the order's.
+  std::vector<Tri> tris = box(big_lo, big_hi, 1);
+  for (const auto& part : {box(small_lo, small_hi, 0), quad(-40, -40, 40, 40, -20.0, false, 1)})
+    tris.insert(tris.end(), part.begin(), part.end());
+  const Mesh mesh = make_mesh(tris);
+  auto mats = default_materials();
+  const float albedo[2][3] = {{0.8f, 0.1f, 0.2f}, {0.1f, 0.6f, 0.3f}};
+  for (int m = 0; m < 2; ++m)
+    for (int c = 0; c < 3; ++c) mats[m].albedo[c] = albedo[m][c];
+  const std::vector<Image> maps;
+  RasterInputs in{mesh, mats, maps, square_perspective(), w, h};
+  in.back_layer = true;
+  const GBufferImages plain = cpu::rasterize(in, 2);
+  EXPECT_TRUE(plain.back_albedo.empty());
+  in.back_albedo = true;
+  for (int threads : {1, 2}) {
+    const GBufferImages g = cpu::rasterize(in, threads);
+    ASSERT_EQ(g.back_albedo.width, w);
+    ASSERT_EQ(g.back_albedo.height, h);
+    EXPECT_EQ(g.back_position.data, plain.back_position.data);  // the albedo changes no other layer
+    int per_material[2] = {0, 0}, bare_front = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double nx = (x + 0.5) / w * 2 - 1, ny = (y + 0.5) / h * 2 - 1;
+        const double r = std::max(std::fabs(nx), std::fabs(ny));
+        const int expect = r < 0.5 / 3 ? 0 : (r < 2.0 / 6 ? 1 : -1);
+        const float* bp = g.back_position.px(x, y);
+        const float* a = g.back_albedo.px(x, y);
+        if (expect < 0) {
+          ASSERT_EQ(bp[3], 0.0f) << x << "," << y;
+          ASSERT_EQ(g.position.px(x, y)[3], 1.0f) << x << "," << y;  // the wall
+          ++bare_front;
+        } else {
+          ASSERT_EQ(bp[3], 1.0f) << x << "," << y;
+          if (r < 0.5 / 4) ASSERT_NEAR(bp[2], -4.0f, 4e-5f) << x << "," << y;
+          if (r > 0.5 / 3 && r < 2.0 / 9) ASSERT_NEAR(bp[2], -9.0f, 9e-5f) << x << "," << y;
+          ++per_material[expect];
+        }
+        for (int c = 0; c < 3; ++c)
+          ASSERT_EQ(a[c], expect < 0 ? 0.0f : albedo[expect][c]) << x << "," << y << " channel " << c;
+        ASSERT_EQ(a[3], bp[3]) << x << "," << y;
+      }
+    EXPECT_GT(per_material[0], 50);
+    EXPECT_GT(per_material[1], 200);
+    EXPECT_GT(bare_front, 1000);
+  }
+}
+
+TEST(Raster, BackAlbedoBadInputNamesTheArgument) {
+  const Mesh mesh = make_mesh(quad(-0.5, -0.5, 0.5, 0.5, -2.0));
+  const std::vector<Image> maps;
+  auto error_of = [&](const std::vector<Material>& mats, bool back_layer) -> std::string {
+    RasterInputs in{mesh, mats, maps, square_perspective(), 8, 8};
+    in.back_layer = back_layer;
+    in.back_albedo = true;
+    try {
+      cpu::rasterize(in, 1);
+    } catch (const InvalidArgument& e) {
+      return e.argument() + " | " + e.what();
+    }
+    return "no error";
+  };
+  auto mats = default_materials();
+  EXPECT_EQ(error_of(mats, false).rfind("back_albedo | ", 0), 0u) << error_of(mats, false);
+  mats[1].albedo[2] = -0.25f;
+  const std::string negative = error_of(mats, true);
+  EXPECT_EQ(negative.rfind("material_albedo | ", 0), 0u) << negative;
+  EXPECT_NE(negative.find("row 1"), std::string::npos) << negative;
+  mats[1].albedo[2] = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(error_of(mats, true).rfind("material_albedo | ", 0), 0u) << error_of(mats, true);
+  mats[1].albedo[2] = std::nanf("");
+  EXPECT_EQ(error_of(mats, true).rfind("material_albedo | ", 0), 0u) << error_of(mats, true);
+  mats[1].albedo[2] = 0.0f;
+  EXPECT_EQ(error_of(mats, true), "no error");
 }
 
 TEST(Raster, NonFiniteCornersSkipTheTriangleOnly) {

@@ -262,6 +262,38 @@ def test_rasterizer_matches_cpu(gl, kind, w, h, artifacts):
         assert not out[layer][~cb].any()
 
 
+@pytest.mark.parametrize("kind", ["persp", "ortho"])
+@pytest.mark.parametrize("w,h", SIZES)
+def test_rasterizer_back_albedo_matches_cpu(gl, kind, w, h, artifacts):
+    """back_albedo is copied from the material table, so where both backends
+    find a back surface they give the same bits. The sphere's triangles take
+    three materials in turn, so a triangle looked up wrongly shows."""
+    m = mesh_inputs(kind, w, h)
+    index = m["material_index"].copy()
+    sphere = index == 0
+    index[sphere] = np.arange(sphere.sum()) % 3
+    index[~sphere] = 3
+    # uv_sphere winds its triangles inward: turned outward, its far side is
+    # the back layer.
+    positions = m["positions"].copy()
+    positions[sphere] = positions[sphere][:, ::-1]
+    normals = m["normals"].copy()
+    normals[sphere] = normals[sphere][:, ::-1]
+    materials = np.repeat(m["materials"][:1], 4, axis=0)
+    albedo = np.array([[0.9, 0.2, 0.1], [0.1, 0.8, 0.2], [0.2, 0.3, 1.25], [0.5, 0.5, 0.5]], np.float32)
+    args = (positions, normals, index, materials, m["projection"], w, h)
+    cpu = gl.rasterize(*args, back_layer=True, material_albedo=albedo, backend="cpu")
+    out = gl.rasterize(*args, back_layer=True, material_albedo=albedo, backend="gl")
+    ca, cb = cpu["back_position"][..., 3] > 0, out["back_position"][..., 3] > 0
+    assert ca.sum() > 200
+    report(f"raster {kind} {w}x{h} back coverage", float((ca == cb).mean()), 0.995, artifacts,
+           cpu["back_position"], out["back_position"])
+    both = ca & cb
+    assert np.array_equal(cpu["back_albedo"][both], out["back_albedo"][both])
+    assert len(np.unique(out["back_albedo"][both][:, 0])) == 3  # the sphere's three, not the floor's
+    assert not out["back_albedo"][~cb].any()
+
+
 # --- context, errors, threads -----------------------------------------------------------
 
 

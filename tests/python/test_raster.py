@@ -292,6 +292,15 @@ BAD = [
     ("height", _with(height=40000)),
     ("projection", _with(projection=np.zeros((4, 4)))),
     ("backend", _with(backend="vulkan")),
+    ("material_albedo", _with(material_albedo=np.zeros((2, 3), np.float32))),  # without back_layer
+    ("material_albedo", _with(back_layer=True, material_albedo=np.zeros((3, 3), np.float32))),
+    ("material_albedo", _with(back_layer=True, material_albedo=np.zeros((2, 4), np.float32))),
+    ("material_albedo", _with(back_layer=True, material_albedo=np.zeros(6, np.float32))),
+    ("material_albedo", _with(back_layer=True, material_albedo=np.zeros((2, 3), np.int32))),
+    ("material_albedo", _with(back_layer=True, material_albedo=[[0.5, 0.5, 0.5]] * 2)),
+    ("material_albedo", _with(back_layer=True, material_albedo=np.array([[0, 0, 0], [0, np.nan, 0]]))),
+    ("material_albedo", _with(back_layer=True, material_albedo=np.array([[0, 0, np.inf], [0, 0, 0]]))),
+    ("material_albedo", _with(back_layer=True, material_albedo=np.array([[0, 0, 0], [-0.1, 0, 0]]))),
 ]
 
 
@@ -300,6 +309,19 @@ def test_bad_input_raises_value_error_naming_the_argument(argument, kwargs):
     with pytest.raises(ValueError) as err:
         glint_core.rasterize(**kwargs)
     assert str(err.value).startswith(argument + ":"), str(err.value)
+
+
+def test_material_albedo_messages_say_what_was_wrong():
+    with pytest.raises(ValueError) as err:
+        glint_core.rasterize(**_with(material_albedo=np.zeros((2, 3))))
+    assert str(err.value) == "material_albedo: needs back_layer=True"
+    for bad, words in ((np.zeros((3, 3)), ["expected shape", "M = 2"]),
+                       (np.array([[0, 0, 0], [-0.1, 0, 0]]), ["expected finite values >= 0", "row 1"]),
+                       (np.array([[0, 0, 0], [0, np.nan, 0]]), ["expected finite values >= 0", "row 1"])):
+        with pytest.raises(ValueError) as err:
+            glint_core.rasterize(**_with(back_layer=True, material_albedo=bad))
+        for word in words:
+            assert word in str(err.value), str(err.value)
 
 
 def test_empty_materials_are_fine_without_triangles():
@@ -343,6 +365,29 @@ def _gl_or_skip():
         pytest.skip(f"no GL here: {exc}")
 
 
+def closed_box(lo, hi):
+    """The 12 triangles of an axis-aligned box, each wound counter-clockwise seen
+    from outside, float32 (12, 3, 3)."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = []
+    centre = corners.mean(axis=0)
+    for q in quads:
+        for t in ((q[0], q[1], q[2]), (q[0], q[2], q[3])):
+            a, b, c = corners[list(t)]
+            tris.append(t if np.cross(b - a, c - a) @ (a - centre) > 0 else (t[0], t[2], t[1]))
+    return corners[np.array(tris)].astype(np.float32)
+
+
+def slab(lo, hi, d):
+    """Entry and exit distances of rays from the eye (the origin) along d [..., 3]
+    through the box lo..hi; entry < exit where they hit it."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b = np.asarray(lo) / d, np.asarray(hi) / d
+    return np.max(np.minimum(a, b), axis=-1), np.min(np.maximum(a, b), axis=-1)
+
+
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
 def test_back_layer_is_the_far_side_of_a_closed_box(backend):
     """back_layer=True: behind every pixel that sees the box, its exit point
@@ -352,16 +397,8 @@ def test_back_layer_is_the_far_side_of_a_closed_box(backend):
     w, h = 64, 48
     proj = A.projection_matrix("persp", w, h)
     lo, hi = np.array([-1.0, -1.0, -6.0]), np.array([1.0, 1.0, -4.0])
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    tris = []
-    centre = corners.mean(axis=0)
-    for q in quads:
-        for t in ((q[0], q[1], q[2]), (q[0], q[2], q[3])):
-            a, b, c = corners[list(t)]
-            tris.append(t if np.cross(b - a, c - a) @ (a - centre) > 0 else (t[0], t[2], t[1]))
-    pos = corners[np.array(tris)].astype(np.float32)
-    g = glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(tris), np.int32),
+    pos = closed_box(lo, hi)
+    g = glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(pos), np.int32),
                              np.zeros((1, 4), np.float32), proj, w, h, back_layer=True, backend=backend)
     seen = g["position"][..., 3] > 0
     back = g["back_position"][..., 3] > 0
@@ -375,6 +412,84 @@ def test_back_layer_is_the_far_side_of_a_closed_box(backend):
     err = np.abs(g["back_position"][..., :3] - expect)[back].max()
     assert err < 1e-4 * 6.0, err
     # Without the flag there is no such layer.
-    assert "back_position" not in glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(tris), np.int32),
+    assert "back_position" not in glint_core.rasterize(pos, np.zeros_like(pos), np.zeros(len(pos), np.int32),
                                                        np.zeros((1, 4), np.float32), proj, w, h,
                                                        backend=backend)
+
+
+# Two boxes of two materials, the far (larger) one first in the arrays, and an
+# open front-facing wall behind both, which is a front surface with nothing
+# behind it.
+ALBEDO = np.array([[0.8, 0.1, 0.2], [0.1, 0.6, 0.3]])  # per row of MATERIALS
+BOXES = [((-1.6, -1.2, -9.0), (1.4, 1.3, -6.0), 1),   # lo, hi, material
+         ((-0.7, -0.4, -4.5), (0.3, 0.6, -3.5), 0)]
+
+
+def two_boxes_and_a_wall():
+    wall, wall_n, _ = quad(-30.0, -30.0, 30.0, 30.0, -20.0)
+    pos = np.concatenate([closed_box(lo, hi) for lo, hi, _ in BOXES] + [wall])
+    mat = np.concatenate([np.full(12, m, np.int32) for _, _, m in BOXES] + [np.ones(2, np.int32)])
+    nrm = np.zeros_like(pos)  # the face normals: not what this is about
+    return pos, nrm, mat
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gl"])
+def test_back_albedo_is_the_material_of_the_surface_back_position_shows(backend):
+    """material_albedo: back_albedo is (albedo of the back-layer triangle's
+    material, 1) where back_position is set, all zeros elsewhere. Which box's far
+    side a pixel shows is decided here independently: the box its ray enters
+    first (slab method), whose exit back_position must be."""
+    if backend == "gl":
+        _gl_or_skip()
+    w, h = 64, 48
+    proj = A.projection_matrix("persp", w, h)
+    pos, nrm, mat = two_boxes_and_a_wall()
+    g = glint_core.rasterize(pos, nrm, mat, MATERIALS, proj, w, h, back_layer=True,
+                             material_albedo=ALBEDO, backend=backend)
+    assert g["back_albedo"].shape == (h, w, 4) and g["back_albedo"].dtype == np.float32
+    nx, ny = A.pixel_ndc(w, h)
+    _, d = A.unproject_rays(proj, nx, ny)
+    d = d.reshape(h, w, 3)
+    entry, exit_ = np.stack([slab(lo, hi, d) for lo, hi, _ in BOXES], axis=1)  # [2 boxes, H, W] each
+    inside = exit_ - entry  # > 0 where the ray goes through the box
+    hit = inside > 0
+    first = np.argmin(np.where(hit, entry, np.inf), axis=0)  # the box seen
+    # Pixels whose centre is not within a hair of some box's outline.
+    clear = np.all(np.abs(inside) > 1e-3 * np.abs(exit_), axis=0)
+    back = g["back_position"][..., 3] > 0
+    np.testing.assert_array_equal(back[clear], hit.any(axis=0)[clear])
+    assert np.all(g["position"][..., 3] > 0)  # the wall is behind everything else
+    # Where there is a back surface, it is the exit of the box seen, and its
+    # albedo that box's material's (copied, so exact), with alpha 1.
+    sel = back & clear
+    t_exit = np.take_along_axis(exit_, first[None], axis=0)[0]
+    np.testing.assert_allclose(g["back_position"][sel][:, :3], (d * t_exit[..., None])[sel], atol=1e-4 * 9)
+    material = np.array([m for _, _, m in BOXES])[first]
+    expected = ALBEDO.astype(np.float32)[material]
+    np.testing.assert_array_equal(g["back_albedo"][sel][:, :3], expected[sel])
+    np.testing.assert_array_equal(g["back_albedo"][..., 3], g["back_position"][..., 3])
+    assert not g["back_albedo"][~back].any()
+    for k in (0, 1):  # both materials really are shown, and so is the bare wall
+        assert (sel & (material == BOXES[k][2])).sum() > 30, k
+    assert (~back).sum() > 500
+    # back_position is as it was without the albedo, which is only in the dict when asked for.
+    plain = glint_core.rasterize(pos, nrm, mat, MATERIALS, proj, w, h, back_layer=True, backend=backend)
+    assert "back_albedo" not in plain
+    np.testing.assert_array_equal(plain["back_position"], g["back_position"])
+
+
+@pytest.mark.gl
+def test_back_albedo_is_the_same_on_cpu_and_gl():
+    """The albedo is copied, not computed: both backends give the same bits
+    (llvmpipe also gives the same coverage, so the whole image)."""
+    _gl_or_skip()
+    w, h = 96, 64
+    pos, nrm, mat = two_boxes_and_a_wall()
+    for proj in (A.projection_matrix("persp", w, h), A.projection_matrix("ortho", w, h)):
+        out = [glint_core.rasterize(pos, nrm, mat, MATERIALS, proj, w, h, back_layer=True,
+                                    material_albedo=ALBEDO.astype(np.float32), backend=b)
+               for b in ("cpu", "gl")]
+        both = (out[0]["back_position"][..., 3] > 0) & (out[1]["back_position"][..., 3] > 0)
+        assert both.sum() > 500
+        np.testing.assert_array_equal(out[0]["back_albedo"][both], out[1]["back_albedo"][both])
+        np.testing.assert_array_equal(out[0]["back_albedo"], out[1]["back_albedo"])

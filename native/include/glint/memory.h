@@ -58,7 +58,8 @@ void require_memory(uint64_t bytes, const std::string& request, double limit_mb 
 // triangles: of the mesh a march that traces triangles reads (0 for the others).
 uint64_t trace_bytes(int width, int height, March march, bool gl, uint64_t triangles = 0);
 uint64_t pipeline_bytes(int width, int height, const PipelineOptions& opt, bool gl);
-uint64_t raster_bytes(int width, int height, uint64_t triangles, bool back_layer, bool gl);
+uint64_t raster_bytes(int width, int height, uint64_t triangles, bool back_layer, bool back_albedo,
+                      bool gl);
 uint64_t exr_read_bytes(int64_t width, int64_t height, uint64_t layers);
 
 // The checks the backends make on entry, before allocating anything.

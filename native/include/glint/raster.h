@@ -15,6 +15,7 @@ struct Material {
   float specular[3] = {0.0f, 0.0f, 0.0f};  // specular colour, linear
   float shininess = 0.0f;  // the book's units: 0..127.75 (Blender Internal hardness / 4)
   int normal_map = -1;     // index into RasterInputs::normal_maps, -1 for none
+  float albedo[3] = {0.0f, 0.0f, 0.0f};  // diffuse colour, linear
 };
 
 // A triangle soup in view space (Blender camera space: -Z forward).
@@ -36,6 +37,8 @@ struct RasterInputs {
   int height = 0;
   // Also rasterize the back-face layer (GBufferImages::back_position).
   bool back_layer = false;
+  // Also GBufferImages::back_albedo; needs back_layer.
+  bool back_albedo = false;
   // MiB the call may allocate; 0: the default (glint/memory.h, TraceOptions).
   double memory_limit_mb = 0.0;
 };
@@ -48,9 +51,15 @@ struct GBufferImages {
   // behind the front one, (x, y, z, 1), 0 where there is none. A closed
   // object's far side, so back - front is its thickness along the view ray.
   Image back_position;
+  // With RasterInputs::back_albedo: (albedo r, g, b of the back-layer
+  // triangle's material, 1) exactly where back_position is set, 0 elsewhere.
+  // A reflected ray that meets an object's hidden side is shaded with that
+  // side's own material, which the front layer cannot tell.
+  Image back_albedo;
 };
 
-// Throws InvalidArgument naming the bad field (sizes, material indices).
+// Throws InvalidArgument naming the bad field (sizes, material indices,
+// material values, back_albedo without back_layer).
 void validate(const RasterInputs& in);
 
 }  // namespace glint

@@ -589,6 +589,15 @@ void Rasterizer::shade_band(int band, const DepthRows& rows, const std::vector<T
       po[1] = static_cast<float>(p.y);
       po[2] = static_cast<float>(p.z);
       po[3] = 1.0f;
+      if (!in_.back_albedo) continue;
+      // The same winner's material: a reflection that meets this hidden side
+      // is shaded with its own colour, not the front texel's.
+      const float* albedo = in_.materials[mesh.material[static_cast<size_t>(id)]].albedo;
+      float* ao = out_.back_albedo.px(i, j);
+      ao[0] = albedo[0];
+      ao[1] = albedo[1];
+      ao[2] = albedo[2];
+      ao[3] = 1.0f;
     }
   }
 }
@@ -599,8 +608,9 @@ GBufferImages Rasterizer::run() {
   // The outputs are most of the memory a call touches (33 MB each at
   // 1920x1080; the buffer pool keeps them mapped between frames): zero them
   // on all threads at once, since only covered pixels are written later.
-  Image* images[4] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position};
-  parallel_rows(0, back ? 4 : 3, threads_, [&](int k) { *images[k] = Image(width_, height_, 0.0f); });
+  Image* images[5] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position, &out_.back_albedo};
+  const int outputs = back ? (in_.back_albedo ? 5 : 4) : 3;
+  parallel_rows(0, outputs, threads_, [&](int k) { *images[k] = Image(width_, height_, 0.0f); });
 
   if (count <= kChunk) {
     // The usual case: every triangle set up at once, so each band can be

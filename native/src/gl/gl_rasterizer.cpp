@@ -35,7 +35,7 @@ void GlState::release_raster() {
 
 void GlState::raster_targets(RasterTargets& t, int colors, int w, int h, const char* what,
                              const char* pass) {
-  if (t.fbo && t.w == w && t.h == h) return;
+  if (t.fbo && t.w == w && t.h == h && t.colors == colors) return;
   release_targets(t);
   const ContextInfo& ci = info();
   if (w > ci.max_renderbuffer_size || h > ci.max_renderbuffer_size) {
@@ -74,6 +74,7 @@ void GlState::raster_targets(RasterTargets& t, int colors, int w, int h, const c
                 " x RGBA32F + DEPTH32F) is incomplete on " + ci.renderer);
   t.w = w;
   t.h = h;
+  t.colors = colors;
 }
 
 void GlState::buffer_data(GLuint& buffer, GLenum target, size_t bytes, const void* data, const char* what,
@@ -188,7 +189,6 @@ DepthMapping depth_mapping(const Mat4& projection, double d_min, double d_max) {
 
 GBufferImages GlState::rasterize(const RasterInputs& in) {
   const int w = in.width, h = in.height;
-  const size_t tris = in.mesh.triangle_count();
   raster_targets(raster_, 3, w, h, "the G-buffer", "rasterize");
   const CleanMesh clean = clean_mesh(in.mesh);
   const DepthMapping depth = depth_mapping(in.projection, clean.d_min, clean.d_max);
@@ -203,7 +203,7 @@ GBufferImages GlState::rasterize(const RasterInputs& in) {
   out.position = read(w, h, GL_COLOR_ATTACHMENT0, "rasterize");
   out.normal = read(w, h, GL_COLOR_ATTACHMENT1, "rasterize");
   out.specular = read(w, h, GL_COLOR_ATTACHMENT2, "rasterize");
-  if (in.back_layer) out.back_position = rasterize_back(w, h, tris, depth.base, depth.scale, pf);
+  if (in.back_layer) rasterize_back(in, depth.base, depth.scale, pf, out);
   return out;
 }
 
@@ -237,6 +237,18 @@ void GlState::upload_mesh(const RasterInputs& in, const std::vector<float>& posi
     table[4 * k + 3] = shininess_to_alpha(m.shininess);
   }
   buffer_data(buffers_[5], GL_SHADER_STORAGE_BUFFER, table.size() * sizeof(float), table.data(), "material");
+  // Per material: (albedo r, g, b, 1), which the back pass copies as it is,
+  // so the GL result is the CPU's bit for bit. A few bytes a material: sent
+  // even when unused, so the back pass never has a block without a buffer.
+  for (size_t k = 0; k < in.materials.size(); ++k) {
+    const Material& m = in.materials[k];
+    table[4 * k + 0] = m.albedo[0];
+    table[4 * k + 1] = m.albedo[1];
+    table[4 * k + 2] = m.albedo[2];
+    table[4 * k + 3] = 1.0f;
+  }
+  buffer_data(buffers_[6], GL_SHADER_STORAGE_BUFFER, table.size() * sizeof(float), table.data(),
+              "material albedo");
 
   if (!raster_vao_) gl_.GenVertexArrays(1, &raster_vao_);
   gl_.BindVertexArray(raster_vao_);
@@ -260,6 +272,7 @@ void GlState::upload_mesh(const RasterInputs& in, const std::vector<float>& posi
   }
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffers_[4]);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, buffers_[5]);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, buffers_[6]);
 }
 
 // Normal maps: one texture each, sampled GL_LINEAR + GL_REPEAT like the
@@ -340,9 +353,14 @@ void GlState::draw_gbuffer(const RasterInputs& in, double base, double depth_sca
 // The back-face layer: every triangle again into a target of its own, each
 // fragment kept only if it is back-facing and behind the front layer's
 // surface (read from the front pass's position target, still on the GPU).
-Image GlState::rasterize_back(int w, int h, size_t tris, double base, double depth_scale,
-                              const float* proj) {
-  raster_targets(back_, 1, w, h, "the back-face layer", "rasterize (back-face layer)");
+// With back_albedo a second target takes the material albedo of the same
+// fragment, so the depth test that picks the back position picks its albedo.
+void GlState::rasterize_back(const RasterInputs& in, double base, double depth_scale, const float* proj,
+                             GBufferImages& out) {
+  const int w = in.width, h = in.height;
+  const size_t tris = in.mesh.triangle_count();
+  const int colors = in.back_albedo ? 2 : 1;
+  raster_targets(back_, colors, w, h, "the back-face layer", "rasterize (back-face layer)");
   const GLuint prog = program("gbuffer_back.frag", "gbuffer.vert");
   gl_.UseProgram(prog);
   gl_.Uniform1fv(loc(prog, "u_proj"), 16, proj);
@@ -351,13 +369,18 @@ Image GlState::rasterize_back(int w, int h, size_t tris, double base, double dep
   gl_.ActiveTexture(GL_TEXTURE0 + 1);
   gl_.BindTexture(GL_TEXTURE_2D, raster_.color[0]);
   gl_.Uniform1i(loc(prog, "u_front"), 1);
+  gl_.Uniform1i(loc(prog, "u_back_albedo"), in.back_albedo ? 1 : 0);
+  // One draw from triangle 0, so the offset is 0; it is set anyway so that
+  // the albedo lookup is the front pass's specular lookup, word for word.
+  // The material buffers are still bound from upload_mesh().
+  gl_.Uniform1i(loc(prog, "u_first_triangle"), 0);
   gl_.BindFramebuffer(GL_FRAMEBUFFER, back_.fbo);
-  const GLenum buf = GL_COLOR_ATTACHMENT0;
-  gl_.DrawBuffers(1, &buf);
+  const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  gl_.DrawBuffers(colors, bufs);
   gl_.Viewport(0, 0, w, h);
   const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   const float one = 1.0f;
-  gl_.ClearBufferfv(GL_COLOR, 0, zero);
+  for (int i = 0; i < colors; ++i) gl_.ClearBufferfv(GL_COLOR, i, zero);
   gl_.DepthMask(GL_TRUE);
   gl_.ClearBufferfv(GL_DEPTH, 0, &one);
   gl_.Enable(GL_DEPTH_TEST);
@@ -366,7 +389,8 @@ Image GlState::rasterize_back(int w, int h, size_t tris, double base, double dep
   gl_.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(tris * 3));
   gl_.Disable(GL_DEPTH_TEST);
   debug_check("rasterize (back-face layer)");
-  return read(w, h, GL_COLOR_ATTACHMENT0, "rasterize (back-face layer)");
+  out.back_position = read(w, h, GL_COLOR_ATTACHMENT0, "rasterize (back-face layer)");
+  if (in.back_albedo) out.back_albedo = read(w, h, GL_COLOR_ATTACHMENT1, "rasterize (back-face layer)");
 }
 
 }  // namespace glint::gl

@@ -192,29 +192,33 @@ class GlState {
 
   // --- rasterizer objects, kept between frames like the textures -----------
   // A framebuffer of `colors` RGBA32F targets and a DEPTH32F buffer: the
-  // G-buffer (3 colours) and the back-face layer (1) are both one of these.
+  // G-buffer (3 colours) and the back-face layer (1, or 2 with its albedo)
+  // are both one of these.
   struct RasterTargets {
     GLuint fbo = 0, depth = 0, color[3] = {0, 0, 0};
-    int w = 0, h = 0;
+    int w = 0, h = 0, colors = 0;
   };
   RasterTargets raster_;  // the G-buffer
   RasterTargets back_;    // the back-face layer
   GLuint raster_vao_ = 0;
-  GLuint buffers_[6] = {0, 0, 0, 0, 0, 0};  // positions, normals, uvs, tangents, triangle material, material table
+  // positions, normals, uvs, tangents, triangle material, material table, material albedo
+  GLuint buffers_[7] = {0, 0, 0, 0, 0, 0, 0};
   std::vector<GLuint> normal_map_textures_;
 
   void release_targets(RasterTargets& t);
 
   void release_raster();
 
-  // (Re)allocates `t` for a w x h frame when its size changed. `what` names
-  // it in errors ("the G-buffer"), `pass` is the stage for out-of-memory ones.
+  // (Re)allocates `t` for a w x h frame when its size or colour count
+  // changed. `what` names it in errors ("the G-buffer"), `pass` is the stage
+  // for out-of-memory ones.
   void raster_targets(RasterTargets& t, int colors, int w, int h, const char* what, const char* pass);
   // The steps of rasterize(), in order (gl_rasterizer.cpp).
   void upload_mesh(const RasterInputs& in, const std::vector<float>& positions, const std::vector<float>& normals);
   void upload_normal_maps(const std::vector<Image>& maps);
   void draw_gbuffer(const RasterInputs& in, double base, double depth_scale, const float* proj);
-  Image rasterize_back(int w, int h, size_t tris, double base, double depth_scale, const float* proj);
+  void rasterize_back(const RasterInputs& in, double base, double depth_scale, const float* proj,
+                      GBufferImages& out);
 
   EglContext ctx_;
   const Api& gl_;
