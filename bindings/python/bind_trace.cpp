@@ -207,7 +207,7 @@ void bind_trace(pyb::module_& m) {
         "'reflective_pixels': pixels traced; 'any_rough': some lod > 0}. `replaced`: the share of the\n"
         "engine's specular the pixel's reflection replaces (vis, or the hidden image's vis).\n"
         "back_albedo: optional float32 [H, W, 4], rasterize()'s back_albedo: adds 'hidden' (hidden_sides():\n"
-        "(albedo x vis, vis) where a ray met an object's hidden side, whose uv then has vis 0) and\n"
+        "(albedo, vis) where a ray met an object's hidden side, whose uv then has vis 0) and\n"
         "'hidden_pixels'. Trace keywords as trace(); nothing is traced when no pixel reflects.");
   m.def(
       "hidden_sides",
@@ -225,7 +225,7 @@ void bind_trace(pyb::module_& m) {
       "uv"_a, "back_albedo"_a,
       "(hidden, count) from a trace's uv (u, v, vis, hit vis) with blocked='occluder': where the\n"
       "report is an occluder (vis > 0, hit vis 0) whose texel has a back surface (back_albedo alpha\n"
-      "> 0), hidden = (back_albedo rgb x vis, vis): the hidden side the ray entered; 0 elsewhere.");
+      "> 0), hidden = (back_albedo rgb, vis): the hidden side the ray entered; 0 elsewhere.");
   m.def(
       "continue_missing_uv",
       [](const pyb::handle& uv, int rings) {

@@ -167,7 +167,7 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
       const float* a = back_albedo.px(i, j);
       if (!(a[3] > 0.0f)) continue;  // an open surface: nothing known behind it
       float* o = out.px(x, y);
-      for (int c = 0; c < 3; ++c) o[c] = a[c] * t[2];
+      for (int c = 0; c < 3; ++c) o[c] = a[c];
       o[3] = t[2];
       ++n;
     }

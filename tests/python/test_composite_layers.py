@@ -192,7 +192,7 @@ def test_the_specular_buffer_is_required():
 def hidden_reference(uv, back_albedo):
     """docs/marches.md, *Blocked rays*: an occluder entered by its hidden side
     (hit channel ENTERED_HIDDEN) whose texel has a back surface shows that
-    surface's albedo, times its visibility; everything else is 0."""
+    surface's albedo, with its visibility in alpha; everything else is 0."""
     entered_hidden = glint_core.schema()["constants"]["ENTERED_HIDDEN"]
     h, w = uv.shape[:2]
     out = np.zeros((h, w, 4), np.float32)
@@ -203,7 +203,7 @@ def hidden_reference(uv, back_albedo):
                 continue
             i, j = int(np.floor(u * np.float32(w))), int(np.floor(v * np.float32(h)))  # in float32, as the core
             if 0 <= i < w and 0 <= j < h and back_albedo[j, i, 3] > 0:
-                out[y, x, :3] = back_albedo[j, i, :3] * vis
+                out[y, x, :3] = back_albedo[j, i, :3]
                 out[y, x, 3] = vis
     return out
 
@@ -220,7 +220,7 @@ def test_hidden_sides_take_the_back_surfaces_albedo():
     uv[0, 3] = ((1 + 0.5) / w, (1 + 0.5) / h, 1.0, -1.0)  # entered, but no back surface there
     got, count = glint_core.hidden_sides(uv, albedo)
     assert count == 1
-    assert np.allclose(got[0, 0], (0.4, 0.2, 0.1, 0.8)) and not got.reshape(-1, 4)[1:].any()
+    assert np.allclose(got[0, 0], (0.5, 0.25, 0.125, 0.8)) and not got.reshape(-1, 4)[1:].any()
     assert np.array_equal(got, hidden_reference(uv, albedo))
     with pytest.raises(ValueError, match="back_albedo"):
         glint_core.hidden_sides(uv, albedo[:5])

@@ -55,8 +55,8 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
 // it entered through the side the camera does not see, the back-face layer's
 // surface at the occluder's texel. Where that texel has a back surface
 // (`back_albedo` alpha > 0, glint::GBufferImages::back_albedo), the pixel
-// shows that surface in its material's colour: (albedo x vis, vis), 0
-// elsewhere. Reads the trace's fourth channel (hit visibility, 0 for an
+// shows that surface in its material's colour: (albedo, vis), 0 elsewhere
+// (a compositor weighs the albedo by vis, as it does what it samples at a hit). Reads the trace's fourth channel (hit visibility, 0 for an
 // occluder); `count` gets the number of such pixels. How a compositor lights
 // the colour is its choice (docs/addon.md, *Hidden sides*).
 Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& count, int threads = 0);
