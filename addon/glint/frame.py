@@ -321,20 +321,22 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
     # The group composites only the region that can change; a debug
     # view or the layers EXR shows the uv and vis of the whole frame,
     # and so does a compositor that cannot place a region (host/nodes).
-    if view != "NONE" or frame.values["write_layers_exr"] or not host_nodes.compositor_places_regions():
+    placeable = host_nodes.compositor_places_regions()
+    if view != "NONE" or frame.values["write_layers_exr"] or not placeable:
         region = (0, 0, cam.width, cam.height)
     else:
         region = compositing.image_region(uv[..., 3], weight[..., 3])
-    images = compositing.region_images(uv, weight, region)
     keys = {compositing.IMAGE_FINE: region}
+    offset = (0.0, 0.0)
+    hidden_imgs = {}
     if settings_logic.shows_hidden_sides(frame.values):
-        # The group reads it (its switch is on): zeros where no ray met a hidden
-        # side, written again only when that changes.
-        if hidden is not None and frame.layers.get("hidden_pixels"):
-            images[compositing.IMAGE_HIDDEN] = compositing.region_cut(hidden, region)
-        else:
-            images[compositing.IMAGE_HIDDEN] = compositing.region_zeros(region)
-            keys[compositing.IMAGE_HIDDEN] = ("none", region)
+        # The group reads them (its switch is on): on the box of this frame's
+        # hidden sides, a pixel or two when there are none.
+        if not frame.layers.get("hidden_pixels"):
+            hidden = None
+        hidden_imgs, offset = compositing.hidden_images(hidden, region, cam.width, cam.height, placeable)
+    images = compositing.region_images(uv, weight, region, offset)
+    images.update(hidden_imgs)
     frame.report.region = region
     if view in compositing.GBUFFER_DEBUG_VIEWS:
         images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)

@@ -118,8 +118,12 @@ def images_of(base, position, spec, uv, weight, lod, debug=None, hidden=None):
     w = weight.copy()
     w[..., 3] = lod
     h, wd = base.shape[:2]
+    own = np.ones_like(base)  # the hidden sides on the whole frame: each pixel's own uv
+    own[..., 0] = ((np.arange(wd) + 0.5) / wd)[None, :]
+    own[..., 1] = ((np.arange(h) + 0.5) / h)[:, None]
+    own[..., 2] = 0 if hidden is None else hidden[..., 3] > 0
     return {cg.IMAGE_UV: uv_image(uv, hidden), cg.IMAGE_WEIGHT: w,
-            cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden,
+            cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden, cg.IMAGE_HIDDEN_UV: own,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
             cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec,
             **cg.coarse_images(lod, (0, 0, wd, h))}
@@ -413,17 +417,26 @@ def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur, hidd
     lit by is read under the region, not at the frame's centre."""
     base, position, spec, uv, seen, weight, lod, light, colour = confined_scene(seed=7)
     hid = None
-    if hidden:
+    if hidden:  # hidden sides in the hits' lower left only: a box off the region's centre
         uv, hid = with_hidden_sides(uv)
-        assert (hid[..., 3] > 0).sum() > 5
+        ys, xs = np.nonzero(hid[..., 3] > 0)
+        away = (xs > np.median(xs)) | (ys > np.median(ys))
+        uv[ys[away], xs[away], 2] = hid[ys[away], xs[away], 3]
+        hid[ys[away], xs[away]] = 0
+        assert (hid[..., 3] > 0).sum() > 3
     full = images_of(base, position, spec, uv, weight, lod, hidden=hid)
     region = cg.image_region(full[cg.IMAGE_UV][..., 3], lod)
+    h, w = base.shape[:2]
     p = cg.REGION_PAD
     # rows 17..25 grown by the pad are 9 + 2p, odd in a frame 48 high: one row more
     assert region == (19 - p, 17 - p, 33 + p, 26 + p + 1)
     assert region[0] % cg.COARSE and region[1] % cg.COARSE  # blocks on the frame's grid, not the region's
-    cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region))
-    cut[cg.IMAGE_HIDDEN] = cg.region_cut(full[cg.IMAGE_HIDDEN], region)
+    boxed, offset = cg.hidden_images(hid, region, w, h)
+    if hidden:  # the box is smaller than the region and not centred on it
+        box = cg.hidden_box(hid[..., 3] > 0, region)
+        assert (box[2] - box[0]) * (box[3] - box[1]) < (region[2] - region[0]) * (region[3] - region[1])
+        assert offset != (0.0, 0.0)
+    cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region, offset), **boxed)
     if world:  # the world path's inputs: a colour (an RGB node, no size) and the weight image
         kw = dict(specular_light=np.array((0.3, 0.35, 0.45, 1.0), np.float32), world_specular=True)
     else:
@@ -443,3 +456,24 @@ def test_region_meeting_the_frame_untranslated_is_caught():
         cg._canvas([np.zeros((4, 5, 4)), np.zeros((6, 5))], (6, 5))
     with pytest.raises(ValueError, match="does not land"):
         cg._translated(np.zeros((3, 3, 4)), 0.25, 0.0, (8, 8))
+
+
+def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
+    seen = np.zeros((20, 30), bool)
+    seen[5:8, 10:13] = True  # 3x3
+    region = (2, 1, 28, 19)  # 26 x 18: even, even
+    box = cg.hidden_box(seen, region)
+    assert box[0] <= 10 and box[1] <= 5 and box[2] >= 13 and box[3] >= 8
+    assert (box[2] - box[0]) % 2 == 0 and (box[3] - box[1]) % 2 == 0
+    images, offset = cg.hidden_images(np.dstack([np.ones((20, 30, 3)), seen]).astype(np.float32), region, 30, 20)
+    bw, bh = box[2] - box[0], box[3] - box[1]
+    assert images[cg.IMAGE_HIDDEN].shape == images[cg.IMAGE_HIDDEN_UV].shape == (bh, bw, 4)
+    assert offset == (box[0] + bw / 2 - 15, box[1] + bh / 2 - 10)
+    # each box pixel's uv is its own centre in the frame
+    assert images[cg.IMAGE_HIDDEN_UV][0, 0, 0] == pytest.approx((box[0] + 0.5) / 30)
+    assert images[cg.IMAGE_HIDDEN_UV][-1, 0, 1] == pytest.approx((box[3] - 0.5) / 20)
+    assert np.array_equal(images[cg.IMAGE_HIDDEN_UV][..., 2], seen[box[1]:box[3], box[0]:box[2]])
+    none, _ = cg.hidden_images(None, region, 30, 20)
+    assert none[cg.IMAGE_HIDDEN].shape[:2] == (2, 2) and not none[cg.IMAGE_HIDDEN].any()
+    whole, at = cg.hidden_images(None, region, 30, 20, placeable=False)
+    assert whole[cg.IMAGE_HIDDEN].shape[:2] == (18, 26) and at == (0.0, 0.0)

@@ -2,7 +2,8 @@
 (logic/compositing.image_region) and translates its results back: the frame
 must be the one the group gives when it works on the whole frame (as it does
 for the layers EXR), in both of Blender's execution models, on the world's
-path and the passes' path, with the second bounce and the blur."""
+path and the passes' path, with the second bounce and the blur, and with the
+hidden sides' box moved into the region."""
 import os
 import re
 
@@ -64,6 +65,9 @@ def test_the_region_composites_what_the_whole_frame_does(blender, samples, sessi
     assert re.search(r"composited \d+x\d+ \(100% of the frame\)", logs[True])
     if "bounce" in case:
         assert "second bounce not run" not in logs[False]
+    # The floating sphere's underside: hidden sides, composited on their own box
+    # and moved into the region (docs/addon.md, *Hidden sides*).
+    assert re.search(r"\d+ pixels show a hidden side", logs[False]), logs[False][-2000:]
     diff = np.abs(frames[False] - frames[True]).max(axis=-1)
     # Bit for bit but for the order of a few float sums, except where the blur
     # runs: its levels work on the region's canvas, whose edge lies nearer the

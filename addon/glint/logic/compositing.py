@@ -17,12 +17,13 @@ compositor two images:
                    the real view angle); lod = glint_core.cone_lod, the
                    footprint of the reflection cone as log2 of pixels
 
-and, with *Fill Hidden Reflections*, a third:
+and, with *Fill Hidden Reflections*, two small ones over the box of the pixels
+whose ray came into an object by its hidden side (:func:`hidden_images`):
 
-    hidden image = (albedo, vis)       where the pixel's ray came into an object
-                                       by its hidden side: that side's material
-                                       colour, the ray's vis there (the UV
-                                       image's vis is then 0 and rep this vis)
+    hidden image    = (albedo, vis)    that side's material colour, the ray's vis
+                                       (the UV image's vis is then 0, rep this vis)
+    hidden UV image = (u, v, 1, 1)     each box pixel's own place in the frame
+                                       (third channel 0 where it is no hidden side)
 
 and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
 
@@ -84,9 +85,14 @@ seen in (the floor under the sphere), so what lights it is that reflector's
 own radiance, the frame at the pixel itself. Albedo x frame is then the diffuse
 light of a surface that sees nothing but the reflector, its colour right next
 to a contact and too bright where the reflector is far or small (docs/addon.md,
-*Hidden sides*). The term is gated by rep, so a cleared UV image (rep 0) passes
-the frame through whatever the hidden image holds. A Switch (``use_hidden``)
-leaves its three nodes out when *Fill Hidden Reflections* is off.
+*Hidden sides*). Those pixels are few (contact bands, a floating object's edge),
+and the compositor's cost is per pixel of a canvas, so the term is made on their
+own box: Map UV reads the frame at each box pixel's own uv (all of them move
+one pixel per pixel, so its filter stays a pixel wide), a Multiply by the albedo,
+a Translate into the region by the offset image's last two channels, and one
+region-sized Add by rep. The Add's factor gates it: a cleared UV image (rep 0)
+passes the frame through whatever the hidden images hold. A Switch
+(``use_hidden``) leaves the nodes out when *Fill Hidden Reflections* is off.
 
 The second bounce: a mirror that reflects another mirror shows that mirror as
 the engine rendered it, without its reflection. Sampling the frame *with* the
@@ -136,14 +142,17 @@ IMAGE_DEBUG = "Glint Debug"
 IMAGE_POSITION = "Glint Position"
 IMAGE_NORMAL = "Glint Normal"
 IMAGE_SPECULAR = "Glint Specular"
-IMAGE_OFFSET = "Glint Offset"  # 1x1: where the region's images go in the frame (:func:`region_offset`)
+IMAGE_OFFSET = "Glint Offset"  # 1x1: where the region's images go in the frame (:func:`region_offset`),
+# and where the hidden sides' box goes in the region (:func:`hidden_images`)
 IMAGE_COARSE = "Glint Coarse"  # the coarse canvas of the wide blur levels (:func:`coarse_images`)
 IMAGE_FINE = "Glint Fine"      # where each region pixel reads the coarse canvas
-IMAGE_HIDDEN = "Glint Hidden"  # (albedo, vis) of the hidden sides rays come into (composite_layers)
+IMAGE_HIDDEN = "Glint Hidden"  # (albedo, vis) of the hidden sides rays come into, on their box
+IMAGE_HIDDEN_UV = "Glint Hidden UV"  # each box pixel's own uv in the frame: where Map UV reads its light
 ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR, IMAGE_OFFSET,
-              IMAGE_COARSE, IMAGE_FINE, IMAGE_HIDDEN)
-# The images cut to the frame's region (the others stay frame-sized).
-REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE, IMAGE_HIDDEN)
+              IMAGE_COARSE, IMAGE_FINE, IMAGE_HIDDEN, IMAGE_HIDDEN_UV)
+# The images cut to the frame's region (the others stay frame-sized, or, the
+# hidden sides', their own box inside it).
+REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE)
 # The one image whose zeros make the group pass the frame through (vis = 0:
 # C = 0 and D = 0): what a frame Glint does not handle clears.
 PASS_THROUGH_IMAGE = IMAGE_UV
@@ -229,11 +238,13 @@ def _mix(blend: str, defaults=None):
     return ("mix", {"blend": blend}, defaults or {})
 
 
-def _translate(sign: int = 1):
+def _translate(sign: int = 1, onto: str = "frame"):
     """A Translate by the region's offset (sign 1: a region-sized canvas to its
     place in the frame) or by minus it (sign -1: the frame moved so that the
-    region's pixels lie where a region-sized canvas centred on it reads them)."""
-    return ("translate", {"sign": sign}, {})
+    region's pixels lie where a region-sized canvas centred on it reads them);
+    ``onto="region"``: by the hidden box's offset, the box's canvas to its place
+    in the region (the offset image's last two channels)."""
+    return ("translate", {"sign": sign, "onto": onto}, {})
 
 
 def _separate():
@@ -274,11 +285,13 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "delta_to_frame": _translate(),
     "specular_to_region": _translate(-1),
     "sep_weight": _separate(),  # the weight image's alpha: the pixel's lod
-    # Hidden sides: C + rep * albedo * frame (see "Hidden sides" above); the
-    # frame-sized frame read on the region (the hidden image first sizes it).
+    # Hidden sides: C + rep * albedo * frame (see "Hidden sides" above), made
+    # on the hidden pixels' box and moved into the region.
     "hidden_image": ("image", {"image": IMAGE_HIDDEN}, {}),
-    "frame_to_region": _translate(-1),
+    "hidden_uv_image": ("image", {"image": IMAGE_HIDDEN_UV}, {}),
+    "hidden_light": ("map_uv", {}, {}),             # the frame at each box pixel
     "hidden_colour": _mix("MULTIPLY", {0: 1.0}),   # albedo * frame
+    "hidden_to_region": _translate(1, onto="region"),
     "with_hidden": _mix("ADD"),                    # C + rep * albedo * frame
     "use_hidden": ("switch", {"on": True}, {}),
     # D on a frame-sized canvas, 0 x frame + 1 x D: what the second Map UV
@@ -349,12 +362,14 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("weight_image", 0, "sep_weight", 0),
     ("sep_offset", 0, "offset_back_x", 0),
     ("sep_offset", 1, "offset_back_y", 0),
-    (GROUP_IN, 0, "frame_to_region", 0),
+    (GROUP_IN, 0, "hidden_light", 0),
+    ("hidden_uv_image", 0, "hidden_light", 1),
     ("hidden_image", 0, "hidden_colour", 1),
-    ("frame_to_region", 0, "hidden_colour", 2),
+    ("hidden_light", 0, "hidden_colour", 2),
+    ("hidden_colour", 0, "hidden_to_region", 0),
     ("sep_uv", 3, "with_hidden", 0),
     ("map_uv", 0, "with_hidden", 1),
-    ("hidden_colour", 0, "with_hidden", 2),
+    ("hidden_to_region", 0, "with_hidden", 2),
     # input 0 when off: C alone, the hidden sides' nodes not run
     ("map_uv", 0, "use_hidden", 0),
     ("with_hidden", 0, "use_hidden", 1),
@@ -401,7 +416,9 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
 for _t, (_kind, _props, _) in GROUP_NODES.items():
     if _kind != "translate":
         continue
-    if _props["sign"] > 0:
+    if _props["onto"] == "region":
+        GROUP_LINKS += [("sep_offset", 2, _t, 1), ("sep_offset", 3, _t, 2)]
+    elif _props["sign"] > 0:
         GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
     else:
         GROUP_LINKS += [("offset_back_x", 0, _t, 1), ("offset_back_y", 0, _t, 2)]
@@ -573,27 +590,60 @@ def region_offset(region: Tuple[int, int, int, int], width: int, height: int) ->
     return x0 + (x1 - x0) / 2.0 - width / 2.0, y0 + (y1 - y0) / 2.0 - height / 2.0
 
 
-def region_cut(image: np.ndarray, region: Tuple[int, int, int, int]) -> np.ndarray:
-    """A frame-sized image's pixels in ``region`` (a view)."""
-    x0, y0, x1, y1 = region
-    return image[y0:y1, x0:x1]
+def hidden_box(seen: np.ndarray, region: Tuple[int, int, int, int]) -> Tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) in the frame: the bounding box of the hidden sides
+    (``seen``, frame-sized) inside ``region``, its width and height of the
+    region's parity so that the Translate into the region moves it by whole
+    pixels (:func:`_same_parity`); none: a box of one or two pixels."""
+    rx0, ry0, rx1, ry1 = region
+    inside = np.asarray(seen)[ry0:ry1, rx0:rx1]
+    rows = np.flatnonzero(inside.any(axis=1))
+    if rows.size == 0:
+        x0, x1, y0, y1 = 0, 1, 0, 1
+    else:
+        cols = np.flatnonzero(inside[rows[0]:rows[-1] + 1].any(axis=0))
+        x0, x1, y0, y1 = int(cols[0]), int(cols[-1]) + 1, int(rows[0]), int(rows[-1]) + 1
+    x0, x1 = _same_parity(x0, x1, rx1 - rx0)
+    y0, y1 = _same_parity(y0, y1, ry1 - ry0)
+    return rx0 + x0, ry0 + y0, rx0 + x1, ry0 + y1
 
 
-def region_zeros(region: Tuple[int, int, int, int]) -> np.ndarray:
-    """A region-sized image of zeros: the hidden image of a frame without hidden sides."""
-    x0, y0, x1, y1 = region
-    return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
+def hidden_images(hidden: Optional[np.ndarray], region: Tuple[int, int, int, int], width: int, height: int,
+                  placeable: bool = True) -> Tuple[Dict[str, np.ndarray], Tuple[float, float]]:
+    """The hidden sides' two images on their box (:func:`hidden_box`) and the
+    Translate that puts the box in the region: :data:`IMAGE_HIDDEN` (albedo,
+    vis) as ``composite_layers`` gives it (None: a frame without hidden sides,
+    all 0), :data:`IMAGE_HIDDEN_UV` (u, v, hidden, 1), each box pixel's centre in
+    the frame, where Map UV reads the light that the formula multiplies (hidden:
+    1 on the hidden sides, 0 on the box's other pixels, which Map UV then does
+    not filter). Not
+    ``placeable`` (a compositor that takes a Translate's offset as one value,
+    host/nodes.compositor_places_regions): the box is the region."""
+    seen = np.zeros((height, width), bool) if hidden is None else np.asarray(hidden)[..., 3] > 0
+    x0, y0, x1, y1 = hidden_box(seen, region) if placeable else region
+    albedo = np.zeros((y1 - y0, x1 - x0, 4), np.float32) if hidden is None else hidden[y0:y1, x0:x1]
+    own = np.ones((y1 - y0, x1 - x0, 4), np.float32)
+    own[..., 0] = ((np.arange(x0, x1) + 0.5) / width)[None, :]
+    own[..., 1] = ((np.arange(y0, y1) + 0.5) / height)[:, None]
+    # Map UV filters only where the third channel is above 0: the box's other
+    # pixels, whose albedo is 0, cost it the uv reads alone.
+    own[..., 2] = seen[y0:y1, x0:x1]
+    rx0, ry0, rx1, ry1 = region
+    offset = (x0 + (x1 - x0) / 2.0 - (rx0 + rx1) / 2.0, y0 + (y1 - y0) / 2.0 - (ry0 + ry1) / 2.0)
+    return {IMAGE_HIDDEN: albedo, IMAGE_HIDDEN_UV: own}, offset
 
 
-def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int]) -> Dict[str, np.ndarray]:
+def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int],
+                  hidden_offset: Tuple[float, float] = (0.0, 0.0)) -> Dict[str, np.ndarray]:
     """The uv and weight images cut to ``region`` (views, not copies), the 1x1
-    offset image that places them (:data:`IMAGE_OFFSET`: dx, dy, 0, 1) and the
-    coarse levels' two images (:func:`coarse_images`)."""
+    offset image that places them (:data:`IMAGE_OFFSET`: dx, dy and the hidden
+    box's offset in the region, :func:`hidden_images`) and the coarse levels'
+    two images (:func:`coarse_images`)."""
     x0, y0, x1, y1 = region
     h, w = np.shape(uv)[:2]
     dx, dy = region_offset(region, w, h)
     images = {IMAGE_UV: uv[y0:y1, x0:x1], IMAGE_WEIGHT: weight[y0:y1, x0:x1],
-              IMAGE_OFFSET: np.array([[[dx, dy, 0.0, 1.0]]], np.float32)}
+              IMAGE_OFFSET: np.array([[[dx, dy, hidden_offset[0], hidden_offset[1]]]], np.float32)}
     images.update(coarse_images(weight[y0:y1, x0:x1, 3], region))
     return images
 
@@ -724,7 +774,8 @@ def _region_origin(region_hw, dx: float, dy: float, frame_hw) -> Tuple[int, int]
 
 def _translated(value, dx: float, dy: float, frame_hw) -> np.ndarray:
     """Blender's Translate of a region-sized canvas, centred on the frame, by
-    (dx, dy) pixels: the region's pixels in a frame of zeros."""
+    (dx, dy) pixels: the region's pixels in a frame of zeros (or a box's in a
+    region's, ``frame_hw`` then the region's size)."""
     value = np.asarray(value, dtype=np.float32)
     bh, bw = value.shape[:2]
     x0, y0 = _region_origin((bh, bw), dx, dy, frame_hw)
@@ -767,7 +818,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     base = np.asarray(base, dtype=np.float32)
     frame_hw = base.shape[:2]
     images = dict(images)
-    images.setdefault(IMAGE_OFFSET, np.array([[[0.0, 0.0, 0.0, 1.0]]], np.float32))
+    images.setdefault(IMAGE_OFFSET, np.array([[[0.0, 0.0, 0.0, 0.0]]], np.float32))
     black = np.array((0.0, 0.0, 0.0, 1.0), np.float32)
     group_in = [base, black if specular_light is None else np.asarray(specular_light, np.float32),
                 black if specular_color is None else np.asarray(specular_color, np.float32)]
@@ -809,6 +860,8 @@ def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, 
         return value[..., 3] if index == 1 else value
     if kind == "translate":
         dx, dy = (float(np.asarray(inp(i), np.float32).flat[0]) for i in (1, 2))
+        if props["onto"] == "region":
+            return _translated(inp(0), dx, dy, np.shape(images[IMAGE_UV])[:2])
         if props["sign"] < 0:
             return _region_of(inp(0), -dx, -dy, np.shape(images[IMAGE_UV])[:2], frame_hw)
         return _translated(inp(0), dx, dy, frame_hw)
