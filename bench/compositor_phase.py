@@ -9,7 +9,7 @@ sample, and with one sample the longest gap between two callbacks is Eevee's
 render. Usage, from a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/compositor_phase.py -- [--size 1920x1080] [--rounds 5] \
-      [--scene matte|default]
+      [--scene matte|default] [--variants "Tiled,Tiled no hidden sides"]
 
 The scene is frame_bench.py's, with its matte or its default (Principled defaults) materials.
 """
@@ -27,14 +27,16 @@ sys.path.insert(0, HERE)
 import blender_scene_kit as kit  # noqa: E402
 import frame_bench as fb  # noqa: E402
 
-# name -> (execution mode, node of the group muted or None)
-VARIANTS = {"Tiled": ("TILED", None), "Full Frame": ("FULL_FRAME", None),
-            "Tiled, Map UV muted": ("TILED", "map_uv")}
+# name -> (execution mode, node of the group muted or None, Fill Hidden Reflections)
+VARIANTS = {"Tiled": ("TILED", None, True), "Full Frame": ("FULL_FRAME", None, True),
+            "Tiled Map UV muted": ("TILED", "map_uv", True),
+            "Tiled no hidden sides": ("TILED", None, False)}
 
 
 def main():
-    opts = kit.script_options({"size": (1920, 1080), "rounds": 5, "scene": ["matte"]},
-                              {"size": kit.frame_size, "rounds": int, "scene": kit.names_among(fb.SCENES, "scene")})
+    opts = kit.script_options({"size": (1920, 1080), "rounds": 5, "scene": ["matte"], "variants": list(VARIANTS)},
+                              {"size": kit.frame_size, "rounds": int, "scene": kit.names_among(fb.SCENES, "scene"),
+                               "variants": kit.names_among(VARIANTS, "variants")})
     if len(opts["scene"]) != 1:
         raise ValueError(f"--scene: one of {', '.join(fb.SCENES)}")
     fb._register_addon(os.path.join(os.path.dirname(HERE), "addon"))
@@ -44,10 +46,12 @@ def main():
     stamps = []
     bpy.app.handlers.render_stats.append(lambda *a: stamps.append(time.perf_counter()))
     group = bpy.data.node_groups["Glint"]
-    res = {name: [] for name in VARIANTS}
+    chosen = {name: VARIANTS[name] for name in opts["variants"]}
+    res = {name: [] for name in chosen}
     for k in range(opts["rounds"] + 1):  # round 0 warms up
-        for name, (mode, muted) in VARIANTS.items():
+        for name, (mode, muted, hidden) in chosen.items():
             scene.node_tree.execution_mode = mode
+            scene.glint.fill_hidden = hidden  # off: the group's use_hidden switch skips its three nodes
             for node in group.nodes:
                 node.mute = node.name == muted
             stamps.clear()

@@ -217,7 +217,8 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
     group = find_group()
     if group is None:
         return
-    hidden = settings_logic.shows_hidden_sides({"fill_hidden": glint.fill_hidden})
+    hidden = settings_logic.shows_hidden_sides({"fill_hidden": glint.fill_hidden,
+                                                "hidden_sides": glint.hidden_sides})
     for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular, hidden).items():
         node = group.nodes.get(name)
         if node is not None:

@@ -32,7 +32,7 @@ def settings_dict(glint) -> dict:
         "max_distance": glint.max_distance, "resolution": glint.resolution, "steps": glint.steps,
         "thickness": glint.thickness, "march": glint.march_name, "preset": glint.preset_name,
         "backend": glint.backend, "debug_view": glint.debug_view, "write_layers_exr": glint.write_layers_exr,
-        "fill_hidden": glint.fill_hidden,
+        "fill_hidden": glint.fill_hidden, "hidden_sides": glint.hidden_sides,
     }
 
 

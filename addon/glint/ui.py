@@ -90,6 +90,9 @@ class GLINT_PT_parameters(_GlintSubPanel, bpy.types.Panel):
         col.prop(glint, "steps")
         layout.prop(glint, "march")
         layout.prop(glint, "fill_hidden")
+        row = layout.row()
+        row.active = glint.fill_hidden
+        row.prop(glint, "hidden_sides")
         layout.prop(glint, "second_bounce")
 
 

@@ -86,6 +86,9 @@ def test_trace_kwargs():
         s.trace_kwargs({"max_distance": 15, "resolution": 2.0, "steps": 10, "thickness": 0.5, "march": "SEED"})
     assert s.look_kwargs({}) == {"blocked": "occluder"}
     assert s.look_kwargs({"fill_hidden": False}) == {"blocked": "miss"}
+    assert s.shows_hidden_sides({}) and not s.shows_hidden_sides({"fill_hidden": False, "hidden_sides": True})
+    assert not s.shows_hidden_sides({"hidden_sides": False})
+    assert s.look_kwargs({"hidden_sides": False}) == {"blocked": "occluder"}  # the object in front, still
     assert s.backend_name("AUTO") == "auto" and s.backend_name("GL") == "gl" and s.backend_name("CPU") == "cpu"
     with pytest.raises(ValueError):
         s.backend_name("VULKAN")

@@ -116,17 +116,18 @@ def trace_kwargs(values: Mapping[str, object], presets: Mapping[str, Mapping] = 
 def look_kwargs(values: Mapping[str, object]) -> Dict[str, str]:
     """What ``glint_core.composite_layers`` takes beyond the trace's quality: what a
     ray that passes behind an object shows. With ``fill_hidden`` (the default) it shows
-    the object in front, as Eevee's SSR does, instead of the engine's reflection of the
-    world (docs/addon.md, "Hidden reflections"). Not for measuring accuracy: an
-    occluder is not the hit."""
-    return {"blocked": "occluder" if shows_hidden_sides(values) else "miss"}
+    the object in front, as Eevee's SSR does, or the side it came into
+    (:func:`shows_hidden_sides`), instead of the engine's reflection of the world
+    (docs/addon.md, "Hidden reflections"). Not for measuring accuracy: an occluder is
+    not the hit."""
+    return {"blocked": "occluder" if values.get("fill_hidden", True) else "miss"}
 
 
 def shows_hidden_sides(values: Mapping[str, object]) -> bool:
     """Whether a ray that comes into an object by its hidden side shows that side
-    in its material's colour (the compositor's hidden image; docs/addon.md,
-    *Hidden sides*): with ``fill_hidden``, where the march reads the back layer."""
-    return bool(values.get("fill_hidden", True))
+    in its material's colour (the compositor's hidden images; docs/addon.md,
+    *Hidden sides*): ``hidden_sides`` with ``fill_hidden`` (both on by default)."""
+    return bool(values.get("fill_hidden", True)) and bool(values.get("hidden_sides", True))
 
 
 def backend_name(enum_value: str) -> str:
