@@ -151,19 +151,39 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
 
     ranges = {}
 
+    def known_thickness(x, y):
+        """The back-face layer's thickness at (x, y), or None where it has none."""
+        if back is not None and _seen(back[y, x]) and -back[y, x, 2] > -pos[y, x, 2]:
+            return -back[y, x, 2] + pos[y, x, 2]
+        return None
+
     def outline_confidence(x, y, hx, hy):
         """A neighbour across an edge that is unseen or behind the texel's plane by
         more than its thickness puts the object's edge somewhere between the two
         centres: a hit d texels toward it from the centre is on the object with
-        chance 1 - d (UNCERTAIN at the texel's edge)."""
+        chance 1 - d (UNCERTAIN at the texel's edge). Unless the back layer places
+        the edge: the square of the thickness, extrapolated as a line from the texel
+        opposite that neighbour through this one, reaches 0 at
+        s = t^2 / (t_in^2 - t^2) texels; a hit with d <= s is on the object."""
         p, n = pos[y, x, :3], planes[y, x]
         lim = -texel_thickness(x, y) * np.linalg.norm(n)
         dx, dy = hx - (x + 0.5), hy - (y + 0.5)
+        t = known_thickness(x, y)
+
+        def across(qx, qy):
+            return not _seen(pos[qy, qx]) or n @ (pos[qy, qx, :3] - p) < lim
+
         c = 1.0
         for qx, qy, toward in ((x - 1, y, -dx), (x + 1, y, dx), (x, y - 1, -dy), (x, y + 1, dy)):
-            if 0 <= qx < w and 0 <= qy < h:
-                if not _seen(pos[qy, qx]) or n @ (pos[qy, qx, :3] - p) < lim:
-                    c = min(c, 1.0 - 2.0 * (1.0 - UNCERTAIN) * min(max(toward, 0.0), 0.5))
+            if not (0 <= qx < w and 0 <= qy < h) or not across(qx, qy):
+                continue
+            d = min(max(toward, 0.0), 0.5)
+            ix, iy = 2 * x - qx, 2 * y - qy
+            if t is not None and 0 <= ix < w and 0 <= iy < h and not across(ix, iy):
+                t_in = known_thickness(ix, iy)
+                if t_in is not None and t_in > t and d * (t_in * t_in - t * t) <= t * t:
+                    continue
+            c = min(c, 1.0 - 2.0 * (1.0 - UNCERTAIN) * d)
         return c
 
     def near_ok(v):

@@ -187,7 +187,22 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
   return PASS;
 }
 
-// outline_confidence() and hit_visibility() in march_hiz.cpp.
+// known_thickness(), outline_confidence() and hit_visibility() in march_hiz.cpp.
+float known_thickness(ivec2 px, float d) {
+  if (!u_has_back) return -1.0;
+  vec4 b = texelFetch(u_back, px, 0);
+  return texel_seen(b) && -b.z > d ? -b.z - d : -1.0;
+}
+
+bool on_screen(ivec2 q) { return q.x >= 0 && q.y >= 0 && q.x < int(u_size.x) && q.y < int(u_size.y); }
+
+// Unseen, or behind the plane (p, n) by more than lim (a negative bound).
+bool across_outline(ivec2 q, vec3 p, vec3 n, float lim) {
+  vec4 o = imageLoad(u_position_img, q);
+  precise float g = n.x * (o.x - p.x) + n.y * (o.y - p.y) + n.z * (o.z - p.z);
+  return !(texel_seen(o) && g >= lim);
+}
+
 float outline_confidence(ivec2 c, vec3 p, vec3 n, float hx, float hy) {
   float th = texel_thickness(c, -p.z);
   precise float lim = -th * sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
@@ -195,14 +210,20 @@ float outline_confidence(ivec2 c, vec3 p, vec3 n, float hx, float hy) {
   precise float dy = hy - (float(c.y) + 0.5);
   ivec2 nb[4] = ivec2[4](c - ivec2(1, 0), c + ivec2(1, 0), c - ivec2(0, 1), c + ivec2(0, 1));
   float toward[4] = float[4](-dx, dx, -dy, dy);
+  float t = known_thickness(c, -p.z);
   float conf = 1.0;
   for (int k = 0; k < 4; ++k) {
     ivec2 q = nb[k];
-    if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) continue;
-    vec4 o = imageLoad(u_position_img, q);
-    precise float g = n.x * (o.x - p.x) + n.y * (o.y - p.y) + n.z * (o.z - p.z);
-    if (texel_seen(o) && g >= lim) continue;
+    if (!on_screen(q) || !across_outline(q, p, n, lim)) continue;
     float d = min(max(toward[k], 0.0), 0.5);
+    ivec2 inner = nb[k ^ 1];
+    if (t > 0.0 && on_screen(inner) && !across_outline(inner, p, n, lim)) {
+      float t_in = known_thickness(inner, -imageLoad(u_position_img, inner).z);
+      precise float fall = t_in * t_in - t * t;
+      precise float reach = d * fall;
+      precise float t2 = t * t;
+      if (t_in > t && reach <= t2) continue;
+    }
     precise float ck = 1.0 - 2.0 * (1.0 - UNCERTAIN) * d;
     conf = min(conf, ck);
   }

@@ -72,6 +72,15 @@ inline float texel_thickness(const Image& position, const Image* back, float thi
   return texel_seen(b) && -b[2] > d ? -b[2] - d : thickness;
 }
 
+// The thickness the back-face layer gives texel (x, y), or -1 where it gives
+// none (no layer, no back surface behind it).
+inline float known_thickness(const Image& position, const Image* back, int x, int y) {
+  if (!back) return -1.0f;
+  const float* b = back->px(x, y);
+  const float d = -position.px(x, y)[2];
+  return texel_seen(b) && -b[2] > d ? -b[2] - d : -1.0f;
+}
+
 // The plane row L of texel (x, y) in NDC (see plane_depth); false when the
 // texel has no usable normal or the plane is seen exactly edge-on.
 inline bool texel_plane(const Image& position, const HizPlanes& normal, const HizCamera& cam, int x, int y,
@@ -271,6 +280,15 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
 // neighbour's. With that edge anywhere in between, a hit d texels from the
 // centre toward such a neighbour is on the object with probability 1 - d:
 // 1 on the inner half, falling to kUncertain at the texel's outer edge.
+//
+// The back-face layer can place the edge (docs/marches.md, *Visibility*): a
+// closed object's thickness along the view ray falls to 0 at its outline,
+// and for a rounded one its square falls about linearly (a sphere's exactly).
+// Extrapolated from the texel and the one opposite the outline, it reaches 0
+// at s = t^2 / (t_in^2 - t^2) texels past the centre; a hit before that is on
+// the object (confidence 1 from that side). Where the thickness does not fall
+// toward the outline (a box's flat side) nothing is placed and the rule above
+// stays; for a wedge the square's line places the edge short of the true one.
 float outline_confidence(const Image& position, const HizPlanes& normal, const Image* back, float thickness,
                          int i, int j, float hx, float hy) {
   const float* p = position.px(i, j);
@@ -280,14 +298,24 @@ float outline_confidence(const Image& position, const HizPlanes& normal, const I
   const float dx = hx - (static_cast<float>(i) + 0.5f), dy = hy - (static_cast<float>(j) + 0.5f);
   const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
   const float toward[4] = {-dx, dx, -dy, dy};
+  const float t = known_thickness(position, back, i, j);
+  auto inside = [&](const int* q) { return q[0] >= 0 && q[1] >= 0 && q[0] < position.width && q[1] < position.height; };
+  auto across = [&](const int* q) {  // unseen, or behind the plane by more than the thickness
+    const float* o = position.px(q[0], q[1]);
+    const float g = n[0] * (o[0] - p[0]) + n[1] * (o[1] - p[1]) + n[2] * (o[2] - p[2]);
+    return !(texel_seen(o) && g >= lim);
+  };
   float c = 1.0f;
   for (int k = 0; k < 4; ++k) {
     const int* q = nb[k];
-    if (q[0] < 0 || q[1] < 0 || q[0] >= position.width || q[1] >= position.height) continue;
-    const float* o = position.px(q[0], q[1]);
-    const float g = n[0] * (o[0] - p[0]) + n[1] * (o[1] - p[1]) + n[2] * (o[2] - p[2]);
-    if (texel_seen(o) && g >= lim) continue;
+    if (!inside(q) || !across(q)) continue;
     const float d = std::min(std::max(toward[k], 0.0f), 0.5f);
+    const int* in = nb[k ^ 1];  // the neighbour opposite the outline
+    if (t > 0.0f && inside(in) && !across(in)) {
+      const float t_in = known_thickness(position, back, in[0], in[1]);
+      const float fall = t_in * t_in - t * t;
+      if (t_in > t && d * fall <= t * t) continue;  // before the placed edge: on the object
+    }
     c = std::min(c, 1.0f - 2.0f * (1.0f - kUncertain) * d);
   }
   return c;
