@@ -294,22 +294,26 @@ def publish(frame: FrameState) -> None:
 
 def _upsample(frame: FrameState, uv, weight, hidden):
     """A reduced frame's layers at the frame's size: (uv, weight, hidden,
-    position, normal, specular); hidden stays None when there is none. The compositor reads the uv and the weight at the
-    frame's size; the G-buffer only for a debug view or the layers EXR (else it
-    stays reduced: fewer frame-size images when memory is short)."""
+    position, normal, specular), hidden None when there is none. The compositor
+    reads the uv, the weight and the hidden sides at the frame's size; the
+    G-buffer only for a debug view or the layers EXR (else it stays reduced:
+    fewer frame-size images when memory is short)."""
     cam, values = frame.camera, frame.values
     position, normal, specular = frame.position, frame.normal, frame.specular
     lod = weight[..., 3]
     lod[lod > 0] += np.float32(np.log2(frame.factor))  # the footprint in frame pixels is `factor` times larger
     refl = texels.reflective_mask(position, specular)
-    stretched = [uv, weight, np.zeros_like(uv) if hidden is None else hidden]
+    stretched = [uv, weight]
     if values["debug_view"] in compositing.GBUFFER_DEBUG_VIEWS or values["write_layers_exr"]:
         stretched += [position, normal, specular]
+    if hidden is not None:
+        stretched.append(hidden)
     stretched = [reduced.upsample_nearest(a, cam.width, cam.height) for a in stretched]
     uv, weight = stretched[:2]
-    hidden = None if hidden is None else stretched[2]
-    if len(stretched) == 6:
-        position, normal, specular = stretched[3:]
+    if hidden is not None:
+        hidden = stretched.pop()
+    if len(stretched) == 5:
+        position, normal, specular = stretched[2:]
     frame.report.reflective_pixels = int(np.count_nonzero(reduced.upsample_nearest(refl, cam.width, cam.height)))
     return uv, weight, hidden, position, normal, specular
 
@@ -334,6 +338,9 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
         # hidden sides, a pixel or two when there are none.
         if not frame.layers.get("hidden_pixels"):
             hidden = None
+            # all zeros, and the same while the region keeps its size: written once
+            # (on a compositor that cannot place them they are frame-sized)
+            keys[compositing.IMAGE_HIDDEN] = keys[compositing.IMAGE_HIDDEN_UV] = ("none", region, placeable)
         hidden_imgs, offset = compositing.hidden_images(hidden, region, cam.width, cam.height, placeable)
     images = compositing.region_images(uv, weight, region, offset)
     images.update(hidden_imgs)
