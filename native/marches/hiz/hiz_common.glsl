@@ -10,10 +10,16 @@ uniform bool u_has_back;
 
 bool normal_usable(vec3 n) { return finite_v3(n) && (n.x != 0.0 || n.y != 0.0 || n.z != 0.0); }
 
-float texel_thickness(ivec2 px, float d) {
-  if (!u_has_back) return u_thickness;
+// known_thickness() and texel_thickness() in march_hiz.cpp.
+float known_thickness(ivec2 px, float d) {
+  if (!u_has_back) return -1.0;
   vec4 b = texelFetch(u_back, px, 0);
-  return texel_seen(b) && -b.z > d ? -b.z - d : u_thickness;
+  return texel_seen(b) && -b.z > d ? -b.z - d : -1.0;
+}
+
+float texel_thickness(ivec2 px, float d) {
+  float t = known_thickness(px, d);
+  return t > 0.0 ? t : u_thickness;
 }
 
 // L . (sx, sy, sz, 1) = 0 is the texel's plane in NDC; false without a usable

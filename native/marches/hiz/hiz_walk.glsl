@@ -187,13 +187,7 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
   return PASS;
 }
 
-// known_thickness(), outline_confidence() and hit_visibility() in march_hiz.cpp.
-float known_thickness(ivec2 px, float d) {
-  if (!u_has_back) return -1.0;
-  vec4 b = texelFetch(u_back, px, 0);
-  return texel_seen(b) && -b.z > d ? -b.z - d : -1.0;
-}
-
+// outline_confidence() and hit_visibility() in march_hiz.cpp.
 bool on_screen(ivec2 q) { return q.x >= 0 && q.y >= 0 && q.x < int(u_size.x) && q.y < int(u_size.y); }
 
 // Unseen, or behind the plane (p, n) by more than lim (a negative bound).

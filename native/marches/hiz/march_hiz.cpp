@@ -64,14 +64,6 @@ inline bool normal_usable(const float* n) {
   return finite(V3{n[0], n[1], n[2]}) && (n[0] != 0.0f || n[1] != 0.0f || n[2] != 0.0f);
 }
 
-// The thickness of texel (x, y): how far behind its surface still counts.
-inline float texel_thickness(const Image& position, const Image* back, float thickness, int x, int y) {
-  if (!back) return thickness;
-  const float* b = back->px(x, y);
-  const float d = -position.px(x, y)[2];
-  return texel_seen(b) && -b[2] > d ? -b[2] - d : thickness;
-}
-
 // The thickness the back-face layer gives texel (x, y), or -1 where it gives
 // none (no layer, no back surface behind it).
 inline float known_thickness(const Image& position, const Image* back, int x, int y) {
@@ -79,6 +71,12 @@ inline float known_thickness(const Image& position, const Image* back, int x, in
   const float* b = back->px(x, y);
   const float d = -position.px(x, y)[2];
   return texel_seen(b) && -b[2] > d ? -b[2] - d : -1.0f;
+}
+
+// The thickness of texel (x, y): how far behind its surface still counts.
+inline float texel_thickness(const Image& position, const Image* back, float thickness, int x, int y) {
+  const float t = known_thickness(position, back, x, y);
+  return t > 0.0f ? t : thickness;
 }
 
 // The plane row L of texel (x, y) in NDC (see plane_depth); false when the
