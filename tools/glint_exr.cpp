@@ -134,9 +134,9 @@ void print_marches() {
   }
   std::printf("\nPresets (--preset):\n");
   for (const glint::Preset& p : glint::presets())
-    std::printf("  %-9s --march %s --steps %d --resolution %g --thickness %g --max-distance %g\n"
+    std::printf("  %-9s --march %s --steps %d --resolution %g --antialias %d --thickness %g --max-distance %g\n"
                 "            %s\n",
-                p.name, glint::to_string(p.trace.march), p.trace.steps, p.trace.resolution,
+                p.name, glint::to_string(p.trace.march), p.trace.steps, p.trace.resolution, p.trace.antialias,
                 p.trace.thickness, p.trace.max_distance, p.description);
 }
 
@@ -246,6 +246,7 @@ Args parse_args(int argc, char** argv, bool& help) {
     else if (flag == "--max-distance") a.opt.trace.max_distance = static_cast<float>(parse_double(flag, next()));
     else if (flag == "--resolution") a.opt.trace.resolution = static_cast<float>(parse_double(flag, next()));
     else if (flag == "--steps") a.opt.trace.steps = parse_int(flag, next());
+    else if (flag == "--antialias") a.opt.trace.antialias = parse_int(flag, next());
     else if (flag == "--thickness") a.opt.trace.thickness = static_cast<float>(parse_double(flag, next()));
     else if (flag == "--preset") {
       const std::string v = next();
@@ -420,6 +421,7 @@ int run(const Args& a) {
                  " steps=" + std::to_string(o.trace.steps) +
                  " thickness=" + number(o.trace.thickness) +
                  " march=" + glint::to_string(o.trace.march) +
+                 " antialias=" + std::to_string(o.trace.antialias) +
                  " blocked=" + glint::to_string(o.trace.blocked) +
                  " weighting=" + glint::to_string(o.weighting) +
                  " blur=" + glint::to_string(o.blur_mode) +

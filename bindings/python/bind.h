@@ -29,7 +29,8 @@ void bind_exact(pyb::module_& m);   // ExactScene: the exact march's triangles a
 // TraceOptions from the keywords trace(), composite_layers() and pipeline()
 // share, checked (ValueError naming the keyword).
 TraceOptions trace_options(float max_distance, float resolution, int steps, float thickness,
-                           const std::string& march, const std::string& blocked, double memory_limit_mb);
+                           const std::string& march, int antialias, const std::string& blocked,
+                           double memory_limit_mb);
 // An optional image argument: None, or an array of the position buffer's size.
 std::optional<Image> optional_image(const pyb::handle& obj, const char* name, const Image& like);
 

@@ -21,7 +21,8 @@ namespace {
 pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
                       const pyb::handle& specular, const pyb::handle& color,
                       const pyb::handle& projection, float max_distance, float resolution,
-                      int steps, float thickness, const std::string& march, const std::string& blocked,
+                      int steps, float thickness, const std::string& march, int antialias,
+                      const std::string& blocked,
                       int blur_size,
                       float blur_separation, const std::string& combine,
                       const std::string& weighting, const std::string& blur,
@@ -31,7 +32,8 @@ pyb::dict py_pipeline(const pyb::handle& position, const pyb::handle& normal,
   PipelineOptions opt;
   opt.weighting = parse_weighting(weighting);
   opt.blur_mode = parse_blur_mode(blur);
-  opt.trace = trace_options(max_distance, resolution, steps, thickness, march, blocked, memory_limit_mb);
+  opt.trace = trace_options(max_distance, resolution, steps, thickness, march, antialias, blocked,
+                            memory_limit_mb);
   if (auto [w, h] = array_size(position); w > 0) {
     const uint64_t px = uint64_t(w) * uint64_t(h);
     const int copies = back_position.is_none() ? 4 : 5;
@@ -86,7 +88,7 @@ void bind_pipeline(pyb::module_& m) {
   m.def("pipeline", &py_pipeline, "position"_a, "normal"_a, "specular"_a, "color"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = p.trace.max_distance, "resolution"_a = p.trace.resolution,
         "steps"_a = p.trace.steps, "thickness"_a = p.trace.thickness, "march"_a = s::march.initial_name,
-        "blocked"_a = to_string(p.trace.blocked), "blur_size"_a = p.blur.size,
+        "antialias"_a = p.trace.antialias, "blocked"_a = to_string(p.trace.blocked), "blur_size"_a = p.blur.size,
         "blur_separation"_a = p.blur.separation, "combine"_a = to_string(p.combine),
         "weighting"_a = to_string(p.weighting), "blur"_a = to_string(p.blur_mode),
         "specular_base"_a = pyb::none(), "back_position"_a = pyb::none(), "mesh"_a = pyb::none(),
@@ -98,7 +100,8 @@ void bind_pipeline(pyb::module_& m) {
             "'combined') and 'stats': backend used, per-stage timings_ms, skipped stages, pixel\n"
             "counts. specular_base: the engine's own specular (rgb), replaced where a hit is found\n"
             "(combine 'over' only). back_position, mesh: as for trace().",
-            {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::blocked, &s::weighting,
+            {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::antialias, &s::blocked,
+             &s::weighting,
              &s::blur, &s::blur_size, &s::blur_separation, &s::combine, &s::backend, &s::threads,
              &s::memory_limit_mb}));
 }

@@ -22,7 +22,8 @@ using namespace pybind11::literals;
 namespace glint::py {
 
 TraceOptions trace_options(float max_distance, float resolution, int steps, float thickness,
-                           const std::string& march, const std::string& blocked, double memory_limit_mb) {
+                           const std::string& march, int antialias, const std::string& blocked,
+                           double memory_limit_mb) {
   TraceOptions o;
   o.memory_limit_mb = memory_limit_mb;
   o.max_distance = max_distance;
@@ -30,6 +31,7 @@ TraceOptions trace_options(float max_distance, float resolution, int steps, floa
   o.steps = steps;
   o.thickness = thickness;
   o.march = parse_march(march);
+  o.antialias = antialias;
   o.blocked = parse_blocked(blocked);
   validate(o);
   return o;
@@ -64,7 +66,7 @@ struct TraceCall {
 
 TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::handle& normal,
                      const pyb::handle& projection, float max_distance, float resolution, int steps,
-                     float thickness, const std::string& march, const std::string& blocked,
+                     float thickness, const std::string& march, int antialias, const std::string& blocked,
                      const pyb::handle& back_position, const pyb::handle& mesh, const pyb::handle& specular,
                      const std::string& backend, int threads, double memory_limit_mb, int outputs) {
   // Before any copy: a 32768x32768 request must be refused with the memory still free.
@@ -80,7 +82,7 @@ TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::h
   c.nrm = image_from_array(normal, "normal", 0.0f, 3);
   require_same_size(c.pos, "position", c.nrm, "normal");
   c.proj = projection_from_array(projection);
-  c.opt = trace_options(max_distance, resolution, steps, thickness, march, blocked, memory_limit_mb);
+  c.opt = trace_options(max_distance, resolution, steps, thickness, march, antialias, blocked, memory_limit_mb);
   c.back = optional_image(back_position, "back_position", c.pos);
   c.spec = optional_image(specular, "specular", c.pos);
   c.tris = mesh_from_arg(mesh);
@@ -90,12 +92,12 @@ TraceCall trace_call(const char* what, const pyb::handle& position, const pyb::h
 
 pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& normal,
                              const pyb::handle& projection, float max_distance, float resolution,
-                             int steps, float thickness, const std::string& march,
+                             int steps, float thickness, const std::string& march, int antialias,
                              const std::string& blocked, const pyb::handle& back_position,
                              const pyb::handle& mesh, const pyb::handle& specular, const std::string& backend,
                              int threads, double memory_limit_mb) {
   const TraceCall c = trace_call("trace", position, normal, projection, max_distance, resolution, steps,
-                                 thickness, march, blocked, back_position, mesh, specular, backend, threads,
+                                 thickness, march, antialias, blocked, back_position, mesh, specular, backend, threads,
                                  memory_limit_mb, 1);
   Image uv;
   {
@@ -108,12 +110,12 @@ pyb::array_t<float> py_trace(const pyb::handle& position, const pyb::handle& nor
 pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& normal,
                               const pyb::handle& specular, const pyb::handle& projection, float max_distance,
                               float resolution, int steps, float thickness, const std::string& march,
-                              const std::string& blocked, const pyb::handle& back_position,
+                              int antialias, const std::string& blocked, const pyb::handle& back_position,
                               const pyb::handle& mesh, const pyb::handle& back_albedo,
                               const std::string& backend, int threads, double memory_limit_mb) {
   if (specular.is_none()) throw InvalidArgument("specular", "expected a float32 [H, W, 4] array, got None");
   const TraceCall c = trace_call("composite_layers", position, normal, projection, max_distance, resolution,
-                                 steps, thickness, march, blocked, back_position, mesh, specular, backend,
+                                 steps, thickness, march, antialias, blocked, back_position, mesh, specular, backend,
                                  threads, memory_limit_mb, back_albedo.is_none() ? 2 : 4);
   const std::optional<Image> albedo = optional_image(back_albedo, "back_albedo", c.pos);
   CompositeLayers layers;
@@ -155,7 +157,7 @@ pyb::dict py_march_details() {
 pyb::dict trace_kwargs(const TraceOptions& o) {
   return pyb::dict("max_distance"_a = o.max_distance, "resolution"_a = o.resolution,
                    "steps"_a = o.steps, "thickness"_a = o.thickness,
-                   "march"_a = march_info(o.march).name);
+                   "march"_a = march_info(o.march).name, "antialias"_a = o.antialias);
 }
 
 pyb::dict py_presets() {
@@ -177,7 +179,8 @@ void bind_trace(pyb::module_& m) {
   const TraceOptions t;
   m.def("trace", &py_trace, "position"_a, "normal"_a, "projection"_a, pyb::kw_only(),
         "max_distance"_a = t.max_distance, "resolution"_a = t.resolution, "steps"_a = t.steps,
-        "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "blocked"_a = to_string(t.blocked),
+        "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "antialias"_a = t.antialias,
+        "blocked"_a = to_string(t.blocked),
         "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "specular"_a = pyb::none(),
         "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
         "memory_limit_mb"_a = t.memory_limit_mb,
@@ -192,11 +195,13 @@ void bind_trace(pyb::module_& m) {
             "serve the rays that hit them.\n"
             "blocked='occluder' gives (u, v, weight, 0) at what hides the hit (docs/marches.md).\n"
             "A request over memory_limit_mb raises MemoryLimitExceeded (a MemoryError).",
-            {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::blocked, &s::backend,
+            {&s::max_distance, &s::resolution, &s::steps, &s::thickness, &s::march, &s::antialias, &s::blocked,
+             &s::backend,
              &s::threads, &s::memory_limit_mb}));
   m.def("composite_layers", &py_composite_layers, "position"_a, "normal"_a, "specular"_a, "projection"_a,
         pyb::kw_only(), "max_distance"_a = t.max_distance, "resolution"_a = t.resolution, "steps"_a = t.steps,
-        "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "blocked"_a = to_string(t.blocked),
+        "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "antialias"_a = t.antialias,
+        "blocked"_a = to_string(t.blocked),
         "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "back_albedo"_a = pyb::none(),
         "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
         "memory_limit_mb"_a = t.memory_limit_mb,

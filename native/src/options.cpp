@@ -49,6 +49,7 @@ void validate(const TraceOptions& o) {
   require_range(schema::resolution.name, o.resolution, schema::resolution.min, schema::resolution.max);
   require_range(schema::thickness.name, o.thickness, schema::thickness.min, schema::thickness.max);
   require_count(schema::steps.name, o.steps, schema::steps.min, schema::steps.max);
+  require_count(schema::antialias.name, o.antialias, schema::antialias.min, schema::antialias.max);
 }
 
 void validate(const BlurOptions& o) {

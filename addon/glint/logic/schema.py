@@ -39,6 +39,10 @@ REUSE_COS = 0.98
 REUSE_DEPTH = 0.02
 # hiz: largest distance in pixels between hits that are shared
 REUSE_PIXELS = 3.0
+# hiz: the rotated grid's smaller offset from a pixel's centre, in pixels
+ANTIALIAS_NEAR = 0.125
+# hiz: the rotated grid's larger offset from a pixel's centre, in pixels
+ANTIALIAS_FAR = 0.375
 # hiz: resolution at or below which rays are reused
 REUSE_RESOLUTION = 0.5
 # back-face layer: least share of the front's view distance a back face lies behind it
@@ -64,6 +68,8 @@ CONSTANTS = {
     "REUSE_COS": REUSE_COS,
     "REUSE_DEPTH": REUSE_DEPTH,
     "REUSE_PIXELS": REUSE_PIXELS,
+    "ANTIALIAS_NEAR": ANTIALIAS_NEAR,
+    "ANTIALIAS_FAR": ANTIALIAS_FAR,
     "REUSE_RESOLUTION": REUSE_RESOLUTION,
     "BACK_SEPARATION": BACK_SEPARATION,
     "DEFAULT_PRESET": DEFAULT_PRESET,
@@ -87,6 +93,9 @@ OPTIONS = {
     "march": {"type": "name", "unit": "",
         "default": "seed", "choices": None,
         "doc": "how rays are marched: a name from the table of marches"},
+    "antialias": {"type": "int", "unit": "rays per pixel",
+        "default": 0, "min": 0, "max": 4,
+        "doc": "hiz: extra rays inside a pixel on a reflection's outline, 0 = one ray per pixel"},
     "blocked": {"type": "name", "unit": "",
         "default": "miss", "choices": ("miss", "occluder",),
         "doc": "what a hiz ray blocked by a surface it passes behind reports"},

@@ -58,6 +58,7 @@ struct TraceOptions {
   float thickness = schema::thickness.initial_float();
   March march = March::Seed;
   Blocked blocked = static_cast<Blocked>(schema::blocked.initial_index());  // hiz only
+  int antialias = schema::antialias.initial_int();  // hiz only: extra rays on outlines
   // MiB this call (a trace, or the whole pipeline) may allocate (glint/memory.h).
   double memory_limit_mb = schema::memory_limit_mb.initial;
 };

@@ -90,6 +90,13 @@ constexpr float kFootprintSpread = 0.5f;
 constexpr float kReuseCos = 0.98f;
 constexpr float kReuseDepth = 0.02f;
 constexpr float kReusePixels = 3.0f;
+// Antialiased outlines (docs/marches.md): a pixel whose hit meets a miss
+// beside it on the same surface also traces rays at these offsets from its
+// centre, in pixels: the rotated grid (-n, -f), (f, -n), (n, f), (-f, n),
+// whose four samples fall in four different rows and columns of a 4x4 grid,
+// so a near-horizontal or near-vertical outline is seen at four positions.
+constexpr float kAntialiasNear = 0.125f;
+constexpr float kAntialiasFar = 0.375f;
 // At resolution <= this the march traces every other pixel of every other
 // row first and reuses their rays where they agree (hiz_reuses_rays()).
 constexpr float kReuseResolution = 0.5f;
@@ -146,6 +153,10 @@ inline constexpr Constant kConstants[] = {
      "hiz: largest relative view-distance difference of pixels that share a ray"},
     {"REUSE_PIXELS", Type::Float, hiz::kReusePixels, nullptr,
      "hiz: largest distance in pixels between hits that are shared"},
+    {"ANTIALIAS_NEAR", Type::Float, hiz::kAntialiasNear, nullptr,
+     "hiz: the rotated grid's smaller offset from a pixel's centre, in pixels"},
+    {"ANTIALIAS_FAR", Type::Float, hiz::kAntialiasFar, nullptr,
+     "hiz: the rotated grid's larger offset from a pixel's centre, in pixels"},
     {"REUSE_RESOLUTION", Type::Float, hiz::kReuseResolution, nullptr,
      "hiz: resolution at or below which rays are reused"},
     {"BACK_SEPARATION", Type::Double, kBackSeparation, nullptr,
@@ -195,6 +206,10 @@ inline constexpr Option thickness{"thickness", Type::Float, 0.5, nullptr, 0.0, 1
                                   "how far behind a surface still counts as a hit"};
 inline constexpr Option march{"march", Type::Name, 0, "seed", 0, 0, "", nullptr,
                               "how rays are marched: a name from the table of marches"};
+// Samples a hiz pixel adds where its hit meets a miss beside it (docs/marches.md,
+// *Antialiased outlines*): 0 is one ray per pixel, 4 the rotated grid.
+inline constexpr Option antialias{"antialias", Type::Int, 0, nullptr, 0, 4, "rays per pixel", nullptr,
+                                  "hiz: extra rays inside a pixel on a reflection's outline, 0 = one ray per pixel"};
 inline constexpr Option blocked{"blocked", Type::Name, 0, "miss", 0, 0, "", kBlockedNames,
                                 "what a hiz ray blocked by a surface it passes behind reports"};
 // The look.
@@ -219,7 +234,7 @@ inline constexpr Option memory_limit_mb{"memory_limit_mb", Type::Double, 0.0, nu
 
 // Every option, in the order help texts list them.
 inline constexpr const Option* kOptions[] = {
-    &max_distance, &resolution, &steps,           &thickness, &march,   &blocked, &weighting,
+    &max_distance, &resolution, &steps,    &thickness, &march,   &antialias,       &blocked, &weighting,
     &blur,         &blur_size,  &blur_separation, &combine,   &backend, &threads, &memory_limit_mb};
 
 // A named option's default must be one of its names: checked as the header

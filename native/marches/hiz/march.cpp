@@ -24,10 +24,15 @@ MarchInfo glint_march_hiz() {
               "back_position gives the real depth"},
              {"blocked",
               "what a blocked ray reports: 'miss' nothing; 'occluder' the uv of what hides its hit, "
-              "(u, v, weight, 0): the colour stages show it, the 4th channel says no hit was found"}};
+              "(u, v, weight, 0): the colour stages show it, the 4th channel says no hit was found"},
+             {"antialias",
+              "extra rays from inside a pixel on a reflection's outline (a hit beside a miss), whose share "
+              "of hits becomes its visibility: 0 one ray per pixel, up to 4 (a rotated grid)"}};
   // The pyramid: 2 floats per cell, 4/3 cells per texel, rounded up; the
-  // plane normals 3 floats per texel.
-  m.scratch_per_pixel = 28;
+  // plane normals 3 floats per texel. Antialiased outlines: a report byte
+  // per pixel (CPU), or the outline list's 4 bytes and a batch of samples,
+  // a quarter of the pixels at 16 bytes (GL): 9 more.
+  m.scratch_per_pixel = 37;
   m.uses_back_position = true;
   m.cpu = &cpu::trace_hiz;
   m.gl_program = "trace_hiz.frag";

@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "cpu/ray.h"
 #include "glint/errors.h"
@@ -172,9 +173,9 @@ struct Ray {
   }
 };
 
-bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
-  V3 from, unit_from, normal;
-  if (!read_origin(s, x, y, from, unit_from, normal)) return false;
+// The ray from view point `from` on the reflector, seen along `unit_from`,
+// mirrored about `normal` (unit).
+bool make_ray_from(const MarchSetup& s, V3 from, V3 unit_from, V3 normal, Ray& r) {
   const V3 dir = normalize(reflect(unit_from, normal));
   if (!finite(dir)) return false;
   const float len = clipped_length(s, from, dir, s.opt.max_distance);
@@ -206,6 +207,13 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
   r.t_end = 1.0f;
   r.t_end = r.exit(image);
   return r.t_end > 0.0f;
+}
+
+// Pixel (x, y)'s own ray, from its centre.
+bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
+  V3 from, unit_from, normal;
+  if (!read_origin(s, x, y, from, unit_from, normal)) return false;
+  return make_ray_from(s, from, unit_from, normal, r);
 }
 
 // What a texel does to the ray between fractions ta and tb.
@@ -338,11 +346,25 @@ struct PixelQueue {
   Image& out;
   int y = 0, x = 0, x_end = 0, x_step = 1;  // pixels (x, y), (x + x_step, y), ... before x_end
   bool reuse = false;  // answer from the traced neighbours where they agree (reuse_at())
+  // The outline samples of row y (sample_start()): `per_pixel` rays for each
+  // pixel edges[0..), into samples[4 * job].
+  const int* edges = nullptr;
+  int job = 0, jobs = 0, per_pixel = 0;
+  float* samples = nullptr;
   Ray ray[kWalkLanes] = {};
-  int px[kWalkLanes][2] = {};
+  float* dst[kWalkLanes] = {};  // where each lane's answer goes
 };
 
 bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4]);
+
+// The walk of ray r from pixel (x, y): it leaves the origin's own texel
+// first, since the ray starts on that texel's surface.
+WalkRay walk_from(const Ray& r, int x, int y) {
+  const int box[4] = {x, y, x + 1, y + 1};
+  const float t = r.exit(box);
+  return WalkRay{{r.f0[0], r.f0[1]}, {r.d[0], r.d[1]}, {r.inv[0], r.inv[1]}, {r.nudge[0], r.nudge[1]},
+                 r.a0[2], r.da[2], r.b0, r.db, r.t_end, t, r.num(t), r.b(t)};
+}
 
 bool queue_start(void* ctx, int lane, WalkRay& w) {
   PixelQueue& q = *static_cast<PixelQueue*>(ctx);
@@ -355,13 +377,8 @@ bool queue_start(void* ctx, int lane, WalkRay& w) {
     if (q.in.specular && !is_reflective(q.in.specular->px(x, y))) continue;
     Ray& r = q.ray[lane];
     if (!make_ray(q.s, x, y, r)) continue;
-    q.px[lane][0] = x;
-    q.px[lane][1] = y;
-    // Leave the origin's own texel first: the ray starts on its surface.
-    const int box[4] = {x, y, x + 1, y + 1};
-    const float t = r.exit(box);
-    w = WalkRay{{r.f0[0], r.f0[1]}, {r.d[0], r.d[1]}, {r.inv[0], r.inv[1]}, {r.nudge[0], r.nudge[1]},
-                r.a0[2], r.da[2], r.b0, r.db, r.t_end, t, r.num(t), r.b(t)};
+    q.dst[lane] = o;
+    w = walk_from(r, x, y);
     return true;
   }
   return false;
@@ -376,7 +393,7 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
   bool located;
   const TexelOutcome hit = texel_hit(q.s, q.planes, q.cam, back, r, i, j, ta, tb, th, located);
   if (hit == TexelOutcome::Pass) return true;
-  float* out = q.out.px(q.px[lane][0], q.px[lane][1]);
+  float* out = q.dst[lane];
   if (hit == TexelOutcome::Blocked || hit == TexelOutcome::Entered) {
     // What hides the hit: the colour stages may show it in place of the
     // sky (docs/marches.md, "Blocked rays"). The texel's centre, not where
@@ -470,6 +487,20 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 
 namespace {
 
+// Whether pixel (qx, qy) reflects and lies on the same smooth surface as the
+// pixel at position p with normal n: normals within kReuseCos, view distances
+// within kReuseDepth of each other.
+bool same_surface(const TraceInputs& in, const float* p, const float* n, int qx, int qy) {
+  if (in.specular && !is_reflective(in.specular->px(qx, qy))) return false;
+  const float* pq = in.position.px(qx, qy);
+  const float* nq = in.normal.px(qx, qy);
+  if (!texel_seen(pq) || !(std::fabs(pq[2] - p[2]) <= kReuseDepth * std::fabs(p[2]))) return false;
+  const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  const float d = n[0] * nq[0] + n[1] * nq[1] + n[2] * nq[2];
+  const float qq = nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2];
+  return d > 0.0f && d * d >= kReuseCos * kReuseCos * nn * qq;
+}
+
 // Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
 // would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
 // same smooth surface (reflective, normals within kReuseCos, view distances
@@ -485,18 +516,11 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   const float* n = in.normal.px(x, y);
   // Only where the pixel's own ray exists (read_origin() would take it).
   if (!texel_seen(p) || !finite(V3{p[0], p[1], p[2]}) || !finite(V3{n[0], n[1], n[2]})) return false;
-  const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
   int hits = 0;
   for (int e = 0; e < k; ++e) {
     const int qx = q[e][0], qy = q[e][1];
     if (qx < 0 || qy < 0 || qx >= out.width || qy >= out.height) return false;
-    if (in.specular && !is_reflective(in.specular->px(qx, qy))) return false;
-    const float* pq = in.position.px(qx, qy);
-    const float* nq = in.normal.px(qx, qy);
-    if (!texel_seen(pq) || !(std::fabs(pq[2] - p[2]) <= kReuseDepth * std::fabs(p[2]))) return false;
-    const float d = n[0] * nq[0] + n[1] * nq[1] + n[2] * nq[2];
-    const float qq = nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2];
-    if (!(d > 0.0f) || !(d * d >= kReuseCos * kReuseCos * nn * qq)) return false;
+    if (!same_surface(in, p, n, qx, qy)) return false;
     if (out.px(qx, qy)[2] > 0.0f) ++hits;
   }
   if (hits == 0) {
@@ -541,6 +565,126 @@ bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4])
     q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1, k = 4;
   }
   return reuse_neighbours(in, out, x, y, q, k, o);
+}
+
+// --- Antialiased outlines (docs/marches.md) --------------------------------
+
+// A pixel's report as the outline test sees it: a hit (visibility in the
+// fourth channel), a plain miss, or anything else (a blocked ray's occluder),
+// which is left as it is.
+enum class Report { Miss, Hit, Other };
+inline Report report_of(const float* o) {
+  if (o[3] > 0.0f) return Report::Hit;
+  return o[2] == 0.0f && o[3] == 0.0f ? Report::Miss : Report::Other;
+}
+
+// Pixel (x, y) is on a reflection's outline when its report is a hit and a
+// neighbour's on the same surface a miss, or the other way round.
+// `reports` holds report_of() of every pixel, a byte each. They are compared
+// first: most pixels agree with all four neighbours, and the G-buffer is then
+// never read.
+bool on_outline(const TraceInputs& in, const unsigned char* reports, int width, int height, int x, int y) {
+  const auto report = [&](int i, int j) { return static_cast<Report>(reports[static_cast<size_t>(j) * width + i]); };
+  const Report r = report(x, y);
+  if (r == Report::Other) return false;
+  const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+  bool differs[4] = {false, false, false, false};
+  bool any = false;
+  for (int k = 0; k < 4; ++k) {
+    const int* q = nb[k];
+    if (q[0] < 0 || q[1] < 0 || q[0] >= width || q[1] >= height) continue;
+    const Report rq = report(q[0], q[1]);
+    any |= differs[k] = rq != Report::Other && rq != r;
+  }
+  if (!any) return false;
+  if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
+  const float* p = in.position.px(x, y);
+  const float* n = in.normal.px(x, y);
+  if (!texel_seen(p) || !finite(V3{p[0], p[1], p[2]}) || !finite(V3{n[0], n[1], n[2]})) return false;
+  for (int k = 0; k < 4; ++k)
+    if (differs[k] && same_surface(in, p, n, nb[k][0], nb[k][1])) return true;
+  return false;
+}
+
+// The ray of pixel (x, y) from offset (ox, oy) pixels off its centre: from
+// where the view ray through that point meets the texel's tangent plane,
+// mirrored about the pixel's shading normal. False where the plane is seen
+// edge-on or the point would leave the texel's depth range (base_range()).
+bool subpixel_ray(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, int x, int y, float ox,
+                  float oy, Ray& r) {
+  V3 from, unit_from, normal;
+  if (!read_origin(s, x, y, from, unit_from, normal)) return false;
+  float L[4];
+  if (!texel_plane(*s.position, planes, cam, x, y, L)) return false;
+  const float w = static_cast<float>(s.position->width), h = static_cast<float>(s.position->height);
+  const float sx = (static_cast<float>(x) + (0.5f + ox)) * (2.0f / w) - 1.0f;
+  const float sy = (static_cast<float>(y) + (0.5f + oy)) * (2.0f / h) - 1.0f;
+  const float sz = -(L[0] * sx + L[1] * sy + L[3]) / L[2];
+  const float* H = cam.inv;
+  float v[4];
+  for (int k = 0; k < 4; ++k) v[k] = H[4 * k] * sx + H[4 * k + 1] * sy + H[4 * k + 2] * sz + H[4 * k + 3];
+  const V3 at{v[0] / v[3], v[1] / v[3], v[2] / v[3]};
+  const float d = -from.z;
+  if (!finite(at) || !(std::fabs(-at.z - d) <= kFootprintSpread * std::fabs(d))) return false;
+  if (!incident_direction(s, at, unit_from)) return false;
+  return make_ray_from(s, at, unit_from, normal, r);
+}
+
+// The rotated grid (glint/schema.h): sample k's offset from the centre.
+constexpr float kAaOffset[4][2] = {{-hiz::kAntialiasNear, -hiz::kAntialiasFar},
+                                   {hiz::kAntialiasFar, -hiz::kAntialiasNear},
+                                   {hiz::kAntialiasNear, hiz::kAntialiasFar},
+                                   {-hiz::kAntialiasFar, hiz::kAntialiasNear}};
+
+// The walk's start for the outline samples: job j is sample j % per_pixel of
+// pixel edges[j / per_pixel] in row y. A sample without a ray of its own
+// keeps the centre's report.
+bool sample_start(void* ctx, int lane, WalkRay& w) {
+  PixelQueue& q = *static_cast<PixelQueue*>(ctx);
+  while (q.job < q.jobs) {
+    const int j = q.job++;
+    const int x = q.edges[j / q.per_pixel], k = j % q.per_pixel;
+    float* o = q.samples + static_cast<size_t>(j) * 4;
+    const float* c = q.out.px(x, q.y);
+    o[0] = c[0], o[1] = c[1], o[2] = c[2], o[3] = c[3];
+    Ray& r = q.ray[lane];
+    if (!subpixel_ray(q.s, q.planes, q.cam, x, q.y, kAaOffset[k][0], kAaOffset[k][1], r)) continue;
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    q.dst[lane] = o;
+    w = walk_from(r, x, q.y);
+    return true;
+  }
+  return false;
+}
+
+// The pixel's report from its centre c and its k samples, the box filter of
+// the k + 1: visibility is the hits' share of them, and the uv their
+// visibility-weighted mean. Only where every hit lies within kReusePixels of
+// the first (one object's outline against a miss) and nothing else was
+// reported; elsewhere `o` keeps the centre's report.
+void resolve_outline(const float* c, const float* samples, int k, float w, float h, float* o) {
+  const float* ref = c[3] > 0.0f ? c : nullptr;
+  for (int j = 0; j < k && !ref; ++j)
+    if (samples[4 * j + 3] > 0.0f) ref = samples + 4 * j;
+  if (!ref) return;
+  float su = 0.0f, sv = 0.0f, sw = 0.0f;
+  auto add = [&](const float* s) {
+    const Report r = report_of(s);
+    if (r != Report::Hit) return r == Report::Miss;
+    const float du = (s[0] - ref[0]) * w, dv = (s[1] - ref[1]) * h;
+    if (!(du * du + dv * dv <= kReusePixels * kReusePixels)) return false;
+    su += s[3] * s[0];
+    sv += s[3] * s[1];
+    sw += s[3];
+    return true;
+  };
+  if (!add(c)) return;
+  for (int j = 0; j < k; ++j)
+    if (!add(samples + 4 * j)) return;
+  const float vis = sw / static_cast<float>(k + 1);
+  o[0] = su / sw;
+  o[1] = sv / sw;
+  o[2] = o[3] = vis;
 }
 
 }  // namespace
@@ -590,12 +734,48 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
   };
   if (!hiz_reuses_rays(opt)) {
     parallel_rows(0, out.height, threads, [&](int y) { walk_row(y, 0, 1, false); });
-    return out;
+  } else {
+    // Every other pixel of every other row first; then the rest, from them.
+    parallel_rows(0, (out.height + 1) / 2, threads, [&](int j) { walk_row(2 * j, 0, 2, false); });
+    parallel_rows(0, out.height, threads,
+                  [&](int y) { walk_row(y, (y & 1) ? 0 : 1, (y & 1) ? 1 : 2, true); });
   }
-  // Every other pixel of every other row first; then the rest, from them.
-  parallel_rows(0, (out.height + 1) / 2, threads, [&](int j) { walk_row(2 * j, 0, 2, false); });
-  parallel_rows(0, out.height, threads,
-                [&](int y) { walk_row(y, (y & 1) ? 0 : 1, (y & 1) ? 1 : 2, true); });
+  if (opt.antialias <= 0) return out;
+  // The outlines: found on the whole frame first, then each row's samples
+  // walked and resolved (a row writes only its own pixels, which no other
+  // row reads by then).
+  std::vector<unsigned char> reports(out.pixel_count());
+  parallel_rows(0, out.height, threads, [&](int y) {
+    unsigned char* row = reports.data() + static_cast<size_t>(y) * out.width;
+    for (int x = 0; x < out.width; ++x) row[x] = static_cast<unsigned char>(report_of(out.px(x, y)));
+  });
+  std::vector<std::vector<int>> edges(static_cast<size_t>(out.height));
+  parallel_rows(0, out.height, threads, [&](int y) {
+    for (int x = 0; x < out.width; ++x)
+      if (on_outline(in, reports.data(), out.width, out.height, x, y)) edges[y].push_back(x);
+  });
+  const int k = std::min(opt.antialias, 4);
+  const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
+  parallel_rows(0, out.height, threads, [&](int y) {
+    const std::vector<int>& row = edges[y];
+    if (row.empty()) return;
+    std::vector<float> samples(row.size() * static_cast<size_t>(k) * 4);
+    PixelQueue q{in, setup, planes, cam, out};
+    q.y = y;
+    q.edges = row.data();
+    q.jobs = static_cast<int>(row.size()) * k;
+    q.per_pixel = k;
+    q.samples = samples.data();
+    WalkHost host;
+    host.ctx = &q;
+    host.start = sample_start;
+    host.texel = queue_texel;
+    hiz_walk(walk, host, budget, isa);
+    for (size_t e = 0; e < row.size(); ++e) {
+      float* o = out.px(row[e], y);
+      resolve_outline(o, samples.data() + e * static_cast<size_t>(k) * 4, k, w, h, o);
+    }
+  });
   return out;
 }
 

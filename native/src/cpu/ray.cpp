@@ -10,9 +10,15 @@ bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_from, V3&
   normal = {n[0], n[1], n[2]};
   if (!finite(normal) || dot(normal, normal) == 0.0f) return false;
   from = {p[0], p[1], p[2]};
-  // The incident direction: the seed's normalize(position) is the view ray of
-  // a camera at the origin. An orthographic camera's view rays are parallel,
-  // so reflecting normalize(position) there would mirror the wrong ray.
+  if (!incident_direction(s, from, unit_from)) return false;
+  normal = normalize(normal);
+  return finite(normal);
+}
+
+bool incident_direction(const MarchSetup& s, V3 from, V3& unit_from) {
+  // The seed's normalize(position) is the view ray of a camera at the origin.
+  // An orthographic camera's view rays are parallel, so reflecting
+  // normalize(position) there would mirror the wrong ray.
   if (s.eye_kind == MarchSetup::Eye::Origin) {
     if (dot(from, from) == 0.0f) return false;
     unit_from = normalize(from);
@@ -23,8 +29,7 @@ bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_from, V3&
   } else {
     unit_from = {s.eye[0], s.eye[1], s.eye[2]};
   }
-  normal = normalize(normal);
-  return finite(unit_from) && finite(normal);
+  return finite(unit_from);
 }
 
 float clipped_length(const MarchSetup& s, V3 from, V3 dir, float max_distance) {

@@ -39,6 +39,9 @@ inline float view_distance(V3 v) { return -v.z; }
 // FIX 4: unseen pixels, zero or non-finite normals, and a position at the eye
 // (which has no direction) give (0, 0, 0, 0) instead of NaN.
 bool read_origin(const MarchSetup& s, int x, int y, V3& from, V3& unit_from, V3& normal);
+// The unit incident direction of the camera's view ray through view point
+// `from` (the setup's eye kind); false where it has none.
+bool incident_direction(const MarchSetup& s, V3 from, V3& unit_from);
 
 // FIX 2: the length of the ray, shortened so that its end stays on or in
 // front of the near plane (clip z >= -w) with w > 0. The plane test is
