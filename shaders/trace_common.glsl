@@ -56,18 +56,10 @@ bool fetch_position(vec2 uv, out vec4 p) {
   return false;
 }
 
-// Fix 4 (docs/conventions.md): unseen pixels, zero or non-finite normals and a position at the
-// eye report 0.
-// The specular gate: the seed returns early where a pixel does not reflect.
-bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
-  if (u_has_specular && !is_reflective(texelFetch(u_specular, px, 0))) return false;
-  vec4 p = texelFetch(u_position, px, 0);
-  if (!texel_seen(p)) return false;
-  vec3 n = texelFetch(u_normal, px, 0).xyz;
-  if (!finite_v3(n) || dot3(n, n) == 0.0) return false;
-  from = p.xyz;
-  // The incident direction (see read_origin() in native/src/cpu/ray.cpp): the view ray of the
-  // camera, which for an orthographic one is the same for every pixel.
+// The view ray that reaches view point `from` (incident_direction() in native/src/cpu/ray.cpp),
+// which for an orthographic camera is the same for every pixel. Apart from read_origin() so
+// that the hiz march's outline samples can aim at points off the pixel's centre.
+bool incident_direction(vec3 from, out vec3 unit_from) {
   if (u_eye_kind == 0) {
     if (dot3(from, from) == 0.0) return false;
     unit_from = normalize3(from);
@@ -78,8 +70,22 @@ bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
   } else {
     unit_from = u_eye;
   }
+  return finite_v3(unit_from);
+}
+
+// Fix 4 (docs/conventions.md): unseen pixels, zero or non-finite normals and a position at the
+// eye report 0.
+// The specular gate: the seed returns early where a pixel does not reflect.
+bool read_origin(ivec2 px, out vec3 from, out vec3 unit_from, out vec3 normal) {
+  if (u_has_specular && !is_reflective(texelFetch(u_specular, px, 0))) return false;
+  vec4 p = texelFetch(u_position, px, 0);
+  if (!texel_seen(p)) return false;
+  vec3 n = texelFetch(u_normal, px, 0).xyz;
+  if (!finite_v3(n) || dot3(n, n) == 0.0) return false;
+  from = p.xyz;
+  if (!incident_direction(from, unit_from)) return false;
   normal = normalize3(n);
-  return finite_v3(unit_from) && finite_v3(normal);
+  return finite_v3(normal);
 }
 
 // Fix 2 (docs/conventions.md): the ray length, shortened so the end stays in front of the near

@@ -248,6 +248,51 @@ TEST(GlParity, TraceMatchesTheCpuOnPerspectiveAndOrthographicScenes) {
   }
 }
 
+TEST(GlParity, HizAntialiasedOutlinesMatchTheCpu) {
+  // The outline pixels' extra rays (march_hiz.cpp) on the GL passes, with
+  // every pixel's own ray and with the reuse of rays. The pixels they change
+  // are a few percent of the frame: compared on their own too, so that a GL
+  // trace that skipped them could not pass on the whole frame's share.
+  GLINT_REQUIRE_GL(gl);
+  auto cpu = make_cpu_backend();
+  for (bool ortho : {false, true}) {
+    const test::GBuffer g = scene(ortho, 160, 90);
+    const TraceInputs in{g.position, g.normal, &g.specular, g.projection};
+    for (float resolution : {1.0f, 0.3f}) {
+      for (int antialias : {1, 4}) {
+        TraceOptions o;
+        o.march = March::Hiz;
+        o.resolution = resolution;
+        const Image plain = cpu->trace(in, o);
+        o.antialias = antialias;
+        const Image a = cpu->trace(in, o), b = gl->trace(in, o);
+        std::vector<size_t> changed_px;
+        for (size_t p = 0; p < a.pixel_count(); ++p)
+          for (int c = 0; c < 4; ++c)
+            if (a.data[p * 4 + c] != plain.data[p * 4 + c]) {
+              changed_px.push_back(p);
+              break;
+            }
+        // The changed pixels, as one row.
+        Image ca(static_cast<int>(changed_px.size()), 1), cb(ca.width, 1);
+        for (size_t e = 0; e < changed_px.size(); ++e)
+          for (int c = 0; c < 4; ++c) {
+            ca.data[e * 4 + c] = a.data[changed_px[e] * 4 + c];
+            cb.data[e * 4 + c] = b.data[changed_px[e] * 4 + c];
+          }
+        const double share = agreement(a, b, 1e-4f, 1e-3f), changed = agreement(ca, cb, 1e-4f, 1e-3f);
+        std::printf("trace hiz %s resolution %.1f antialias %d: %.4f of pixels agree, %.4f of the %d changed\n",
+                    ortho ? "ortho" : "persp", resolution, antialias, share, changed, ca.width);
+        // The orthographic view's reflections show only a couple of outline
+        // pixels that change; the perspective one's, a hundred and more.
+        EXPECT_GE(ca.width, ortho ? 1 : 50) << "the outlines should change some pixels";
+        EXPECT_GE(share, 0.99);
+        EXPECT_GE(changed, 0.99);
+      }
+    }
+  }
+}
+
 TEST(GlParity, NonFiniteInputsAreTreatedAsNothingSeenLikeOnTheCpu) {
   GLINT_REQUIRE_GL(gl);
   auto cpu = make_cpu_backend(1);

@@ -5,9 +5,10 @@
 // same operations in the same order. trace_pixel() returns (u, v, visibility,
 // visibility) at a hit (its confidence times the fade at the screen's edge),
 // with u_blocked an occluder's (u, v, fade, 0) or, entered by its hidden side,
-// (u, v, fade, ENTERED_HIDDEN); else 0. Apart from
-// trace_hiz.frag's main() so that trace_hiz_list.comp can walk the pixels it
-// picks from a list.
+// (u, v, fade, ENTERED_HIDDEN); else 0. trace_ray() does the same for a ray
+// made otherwise (hiz_outline_trace.comp's rays from points off the pixel's
+// centre): one walk for both. Apart from trace_hiz.frag's main() so that
+// the compute passes can walk the pixels they pick from a list.
 // Needs common.glsl, trace_common.glsl and hiz_common.glsl.
 
 uniform sampler2D u_pyramid;  // RG32F, full mip chain: (nearest, farthest + thickness)
@@ -76,9 +77,10 @@ uint left_levels(ivec4 box, float te) {
   return left;
 }
 
-bool make_ray(ivec2 px) {
-  vec3 from, unit_from, normal;
-  if (!read_origin(px, from, unit_from, normal)) return false;
+// make_ray_from() in march_hiz.cpp: the ray from view point `from` on the
+// reflector, seen along `unit_from`, mirrored about the unit `normal`, into
+// the g_ globals.
+bool make_ray_from(vec3 from, vec3 unit_from, vec3 normal) {
   vec3 dir = normalize3(reflect3(unit_from, normal));
   if (!finite_v3(dir)) return false;
   float len = clipped_length(from, dir, u_max_distance);
@@ -110,6 +112,13 @@ bool make_ray(ivec2 px) {
   g_t_end = 1.0;
   g_t_end = ray_exit(ivec4(0, 0, int(u_size.x), int(u_size.y)));
   return g_t_end > 0.0;
+}
+
+// Pixel px's own ray, from its centre.
+bool make_ray(ivec2 px) {
+  vec3 from, unit_from, normal;
+  if (!read_origin(px, from, unit_from, normal)) return false;
+  return make_ray_from(from, unit_from, normal);
 }
 
 ivec2 cell_at(int level, float t, ivec2 size) {
@@ -233,10 +242,10 @@ float hit_visibility(float u, float v, float confidence) {
   return vis;
 }
 
-// hiz_walk_scalar() and queue_texel() (march_hiz.cpp): the pixel's own ray
-// walked to its hit.
-vec4 trace_pixel(ivec2 origin) {
-  if (!make_ray(origin)) return vec4(0.0);
+// hiz_walk_scalar() and queue_texel() (march_hiz.cpp): the ray that
+// make_ray_from() prepared, walked to its hit. It starts by leaving texel
+// `origin`, whose surface it starts on (walk_from() in march_hiz.cpp).
+vec4 trace_ray(ivec2 origin) {
   int top = u_levels - 1;
   int budget = u_steps * u_levels;
   float t = ray_exit(ivec4(origin, origin + 1));
@@ -340,4 +349,10 @@ vec4 trace_pixel(ivec2 origin) {
   float conf = hit_located ? outline_confidence(hit_c, hit_p, hit_n, hx, hy) : UNCERTAIN;
   float vis = hit_visibility(u, v, conf);
   return vec4(u, v, vis, vis);
+}
+
+// The pixel's own ray walked to its hit.
+vec4 trace_pixel(ivec2 origin) {
+  if (!make_ray(origin)) return vec4(0.0);
+  return trace_ray(origin);
 }

@@ -1,0 +1,49 @@
+// The hiz march's antialiased outlines (march_hiz.cpp, "Antialiased
+// outlines"), what their passes share. hiz_outline_find.comp lists the pixels
+// on a reflection's outline; hiz_outline_args.comp sizes the two dispatches
+// of each batch; hiz_outline_trace.comp writes the reports of their extra
+// rays (u_per_pixel per listed pixel) and hiz_outline_resolve.comp filters
+// them with the centre's into the frame. The samples are kept for a batch of
+// at most u_batch listed pixels at a time (listed pixels u_first ...), so
+// that their buffer stays within GL_MAX_SHADER_STORAGE_BLOCK_SIZE however
+// large the frame: most frames are one batch, and a batch past the end of
+// the list is a dispatch of no groups.
+
+// The host resets count to 0 before hiz_outline_find.comp.
+layout(std430, binding = 1) buffer HizOutline {
+  uint count;
+  uint outline_pixel[];  // x | y << 16, in no particular order
+};
+
+// Sample j of the batch's listed pixel i at u_per_pixel * i + j.
+layout(std430, binding = 2) buffer HizOutlineSamples {
+  vec4 sample_report[];
+};
+
+uniform int u_per_pixel;  // min(TraceOptions::antialias, 4)
+uniform int u_first;      // the batch's first listed pixel
+uniform int u_batch;      // listed pixels per batch, at most
+
+// The trace and resolve passes' work group size.
+const uint OUTLINE_GROUP = 64u;
+
+// The batch's listed pixels. A dispatch of the batch has groups only when
+// count > u_first (hiz_outline_args.comp).
+uint batch_pixels() { return min(count - uint(u_first), uint(u_batch)); }
+
+// The invocation's index in an indirect dispatch of rows of groups.
+uint invocation_index() {
+  return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * OUTLINE_GROUP + gl_LocalInvocationID.x;
+}
+
+ivec2 unpack_pixel(uint p) { return ivec2(int(p & 0xffffu), int(p >> 16)); }
+
+// report_of() in march_hiz.cpp: a hit (visibility in the fourth channel), a
+// plain miss, or anything else (a blocked ray's occluder), left as it is.
+const int REPORT_MISS = 0;
+const int REPORT_HIT = 1;
+const int REPORT_OTHER = 2;
+int report_of(vec4 o) {
+  if (o.w > 0.0) return REPORT_HIT;
+  return o.z == 0.0 && o.w == 0.0 ? REPORT_MISS : REPORT_OTHER;
+}
