@@ -25,7 +25,9 @@ Scores, over the floor's pixels (the only reflector), sums of absolute values:
            that the dimming takes (light lost)
 
   /usr/bin/python3 bench/motion_bench.py [--sizes 480x270,960x540] [--frames 24]
-      [--marches seed,draft,balanced,high] [--backend cpu|gl]
+      [--marches seed,draft,balanced,high] [--backend cpu|gl] [--supersample 4]
+
+A march may override one preset keyword: balanced:antialias=0.
 
 The camera slides sideways and a little forward, about 1.5 pixels of screen motion per
 frame at 480x270 for the nearer sphere; the pillars are about 4 pixels wide at 480x270.
@@ -174,9 +176,14 @@ def outline_texels(position: np.ndarray) -> np.ndarray:
 
 
 def march_options(name: str):
-    if name == "seed":
-        return dict(max_distance=MAX_DISTANCE)
-    return dict(glint_core.presets()[name], max_distance=MAX_DISTANCE)
+    """A preset's (or the seed's) trace keywords; "balanced:antialias=0" overrides one."""
+    name, _, override = name.partition(":")
+    opts = dict(max_distance=MAX_DISTANCE) if name == "seed" else dict(glint_core.presets()[name],
+                                                                        max_distance=MAX_DISTANCE)
+    if override:
+        key, value = override.split("=")
+        opts[key] = type(opts.get(key, 0))(value)
+    return opts
 
 
 def dimming(uv: np.ndarray, floor: np.ndarray):
@@ -189,7 +196,25 @@ def dimming(uv: np.ndarray, floor: np.ndarray):
     return float((conf < 1 - 1e-6).mean()), float((1.0 - np.minimum(conf, 1.0)).mean())
 
 
-def run(size, frames, marches, backend="cpu"):
+def box_down(image: np.ndarray, s: int) -> np.ndarray:
+    """The mean of each s x s block: a pixel's box filter over its s^2 samples."""
+    hh, ww = image.shape[0] // s, image.shape[1] // s
+    return image.reshape(hh, s, ww, s, -1).mean(axis=(1, 3)).astype(np.float32)
+
+
+def supersampled(v_world, t, mat, cam, exact_scene, w, h, s):
+    """The antialiased frame and exact reflection: the frame rasterized at s x s samples per
+    pixel and exact-traced there, both box-filtered to w x h, as a renderer's antialiasing
+    averages its samples. Returns (colour, E, E faded at the screen's edges)."""
+    g, colour = render(v_world, t, mat, cam, w * s, h * s)
+    uv = glint_core.trace(g["position"], g["normal"], projection(w * s, h * s), march="exact",
+                          mesh=exact_scene.seen_from(cam), specular=g["specular"], max_distance=MAX_DISTANCE)
+    faded = uv.copy()
+    faded[..., 2] *= edge_fade(uv)
+    return box_down(colour, s), box_down(sample(colour, uv), s), box_down(sample(colour, faded), s)
+
+
+def run(size, frames, marches, backend="cpu", supersample=1):
     w, h = size
     v_world, t, mat = scene()
     exact_scene = glint_core.ExactScene(v_world.astype(np.float32), t)
@@ -213,7 +238,13 @@ def run(size, frames, marches, backend="cpu"):
         faded = exact_uv.copy()
         faded[..., 2] *= edge_fade(exact_uv)
         E_faded = sample(colour, faded)
-        cur = {"exact": (E_plain, E_plain)}
+        E_exact = E_plain
+        if supersample > 1:
+            # The frame as a renderer antialiases it, and the reflection with it: the
+            # one-ray exact march is then scored too, for what its own aliasing costs.
+            colour, E_plain, E_faded = supersampled(v_world, t, mat, cam, exact_scene, w, h, supersample)
+            E_exact = sample(colour, exact_uv)
+        cur = {"exact": (E_exact, E_plain)}
         dims = {"exact": dimming(exact_uv, floor)}
         for m in marches:
             opts = march_options(m)
@@ -243,14 +274,18 @@ def main():
     ap.add_argument("--frames", type=int, default=24)
     ap.add_argument("--marches", default="seed,draft,balanced,high")
     ap.add_argument("--backend", default="cpu", help="the marches' backend (the exact march runs on the CPU)")
+    ap.add_argument("--supersample", type=int, default=1,
+                    help="score against the exact reflection of s x s samples per pixel, box-filtered, "
+                         "with the frame antialiased the same way (1: one exact ray per pixel)")
     args = ap.parse_args()
     marches = args.marches.split(",")
     print(f"| size | march | error | change | change / exact's | flicker | error on outlines | hits dimmed "
-          f"| light lost |  ({args.frames} frames, medians, backend {args.backend})")
+          f"| light lost |  ({args.frames} frames, medians, backend {args.backend}, "
+          f"reference {args.supersample}x{args.supersample} samples per pixel)")
     print("|---|---|---|---|---|---|---|---|---|")
     for size in args.sizes.split(","):
         w, h = (int(v) for v in size.split("x"))
-        res = run((w, h), args.frames, marches, args.backend)
+        res = run((w, h), args.frames, marches, args.backend, args.supersample)
         base = res["exact"]["change"]
         for m in ["exact"] + marches:
             r = res[m]

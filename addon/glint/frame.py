@@ -30,7 +30,7 @@ def settings_dict(glint) -> dict:
     """The scene's Glint settings as plain values."""
     return {
         "max_distance": glint.max_distance, "resolution": glint.resolution, "steps": glint.steps,
-        "thickness": glint.thickness, "march": glint.march_name, "preset": glint.preset_name,
+        "antialias": glint.antialias, "thickness": glint.thickness, "march": glint.march_name, "preset": glint.preset_name,
         "backend": glint.backend, "debug_view": glint.debug_view, "write_layers_exr": glint.write_layers_exr,
         "fill_hidden": glint.fill_hidden, "hidden_sides": glint.hidden_sides,
     }

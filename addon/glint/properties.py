@@ -132,10 +132,11 @@ class GLINT_SceneSettings(bpy.types.PropertyGroup):
     preset: EnumProperty(name="Quality", items=_preset_items, get=_get_preset, set=_set_preset,
                          update=_on_preset,
                          description="Quality preset, measured in docs/marches.md: sets the march, "
-                                     "resolution and steps; rendering follows the core's preset")
+                                     "resolution, steps and antialias; rendering follows the core's preset")
     max_distance: _param("max_distance", float, update=_on_compositor_setting)
     resolution: _param("resolution", float)
     steps: _param("steps", int)
+    antialias: _param("antialias", int)
     thickness: _param("thickness", float, update=_on_compositor_setting)
     march: EnumProperty(name="March", items=_march_items, get=_get_march, set=_set_march,
                         update=_on_raw, description="How rays are marched in screen space")

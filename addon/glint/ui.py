@@ -88,6 +88,7 @@ class GLINT_PT_parameters(_GlintSubPanel, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(glint, "resolution")
         col.prop(glint, "steps")
+        col.prop(glint, "antialias")
         layout.prop(glint, "march")
         layout.prop(glint, "fill_hidden")
         row = layout.row()

@@ -10,8 +10,10 @@ pr = load_logic("progress")
 # Made-up tables in the shape glint_core returns them, for the functions'
 # logic alone; the real tables are checked against the core further down.
 PRESETS = {
-    "quick": {"max_distance": 15.0, "resolution": 0.3, "steps": 5, "thickness": 0.5, "march": "walk"},
-    "careful": {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "walk"},
+    "quick": {"max_distance": 15.0, "resolution": 0.3, "steps": 5, "thickness": 0.5, "march": "walk",
+              "antialias": 0},
+    "careful": {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "walk",
+                "antialias": 4},
 }
 DESCRIPTIONS = {"quick": "short walk", "careful": "the knee"}
 DETAILS = {
@@ -60,28 +62,36 @@ def test_the_menus_list_the_cores_tables(core):
 
 def test_presets_set_quality_only():
     v = s.preset_values(PRESETS, "CAREFUL")
-    assert v == {"march": "WALK", "resolution": 0.3, "steps": 10}
+    assert v == {"march": "WALK", "resolution": 0.3, "steps": 10, "antialias": 4}
     with pytest.raises(ValueError):
         s.preset_values(PRESETS, "ULTRA")
 
 
 def test_matching_preset():
-    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "WALK"}, PRESETS) == "CAREFUL"
-    assert s.matching_preset({"resolution": 0.3000001, "steps": 5, "march": "WALK"}, PRESETS) == "QUICK"
-    assert s.matching_preset({"resolution": 0.3, "steps": 11, "march": "WALK"}, PRESETS) == "CUSTOM"
-    assert s.matching_preset({"resolution": 0.3, "steps": 10, "march": "POINTS"}, PRESETS) == "CUSTOM"
+    careful = {"resolution": 0.3, "steps": 10, "march": "WALK", "antialias": 4}
+    assert s.matching_preset(careful, PRESETS) == "CAREFUL"
+    assert s.matching_preset({"resolution": 0.3000001, "steps": 5, "march": "WALK", "antialias": 0},
+                             PRESETS) == "QUICK"
+    assert s.matching_preset(dict(careful, steps=11), PRESETS) == "CUSTOM"
+    assert s.matching_preset(dict(careful, march="POINTS"), PRESETS) == "CUSTOM"
+    assert s.matching_preset(dict(careful, antialias=0), PRESETS) == "CUSTOM"
 
 
 def test_a_named_preset_follows_the_core():
     raw = {"max_distance": 7, "resolution": 1.0, "steps": 64, "thickness": 0.2, "march": "POINTS"}
     kw = s.trace_kwargs(dict(raw, preset="CAREFUL"), PRESETS)
-    assert kw == {"max_distance": 7.0, "resolution": 0.3, "steps": 10, "thickness": 0.2, "march": "walk"}
+    assert kw == {"max_distance": 7.0, "resolution": 0.3, "steps": 10, "thickness": 0.2, "march": "walk",
+                  "antialias": 4}
     assert s.trace_kwargs(dict(raw, preset="CUSTOM"), PRESETS)["march"] == "points"
 
 
 def test_trace_kwargs():
     kw = s.trace_kwargs({"max_distance": 15, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "SEED"})
-    assert kw == {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "seed"}
+    assert kw == {"max_distance": 15.0, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "seed",
+                  "antialias": 0}
+    with pytest.raises(ValueError, match="antialias"):
+        s.trace_kwargs({"max_distance": 15, "resolution": 0.3, "steps": 10, "thickness": 0.5, "march": "SEED",
+                        "antialias": 5})
     with pytest.raises(ValueError, match="resolution"):
         s.trace_kwargs({"max_distance": 15, "resolution": 2.0, "steps": 10, "thickness": 0.5, "march": "SEED"})
     assert s.look_kwargs({}) == {"blocked": "occluder"}

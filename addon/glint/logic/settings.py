@@ -19,6 +19,8 @@ _PANEL = {
     "max_distance": (0.1, 100.0, "Longest reflected ray, in scene units (the seed's maxDistance)"),
     "resolution": (0.0, 1.0, "Share of the on-screen pixels the coarse pass visits (the seed's resolution)"),
     "steps": (0, 64, "Iteration budget; what it counts for each march is in the March tooltip"),
+    "antialias": (0, 4, "Extra rays inside a pixel on a reflection's outline, so that its edges are as "
+                        "smooth as the frame's (Hi-Z march); 0 traces one ray per pixel"),
     "thickness": (0.01, 10.0, "How deep surfaces are behind their front, in scene units (per march: March tooltip)"),
 }
 # name: (default, min, max, soft_min, soft_max, description)
@@ -40,7 +42,7 @@ BACKENDS = (
 CUSTOM = "CUSTOM"
 DEFAULT_PRESET = schema.DEFAULT_PRESET.upper()  # its values are whatever the core says
 # What a preset sets; max_distance and thickness describe the scene, not the quality.
-QUALITY_KEYS = ("march", "resolution", "steps")
+QUALITY_KEYS = ("march", "resolution", "steps", "antialias")
 MISSING = "glint_core is not loaded, so its marches and presets cannot be listed"
 
 
@@ -65,7 +67,7 @@ def preset_items(presets: Mapping[str, Mapping], descriptions: Mapping[str, str]
     """Enum items for the core's presets, then Custom (the raw parameters)."""
     items = []
     for k, (name, kw) in enumerate(presets.items()):
-        values = ", ".join(f"{key} {kw[key]}" for key in QUALITY_KEYS)
+        values = ", ".join(f"{key} {kw.get(key, PARAMETERS.get(key, ('',))[0])}" for key in QUALITY_KEYS)
         items.append((name.upper(), name.title(), f"{descriptions.get(name, '')} ({values})", k))
     if not items and current != CUSTOM:
         items.append((current, current.title(), MISSING, 0))
@@ -78,7 +80,7 @@ def preset_values(presets: Mapping[str, Mapping], name: str) -> Dict[str, object
     for key, kw in presets.items():
         if key.upper() == name:
             return {"march": str(kw["march"]).upper(), "resolution": float(kw["resolution"]),
-                    "steps": int(kw["steps"])}
+                    "steps": int(kw["steps"]), "antialias": int(kw.get("antialias", PARAMETERS["antialias"][0]))}
     raise ValueError(f"preset: expected one of {[k.upper() for k in presets]}, got {name!r}")
 
 
@@ -104,8 +106,9 @@ def trace_kwargs(values: Mapping[str, object], presets: Mapping[str, Mapping] = 
     for key in ("max_distance", "resolution", "thickness"):
         out[key] = float(merged[key])
     out["steps"] = int(merged["steps"])
+    out["antialias"] = int(merged.get("antialias", PARAMETERS["antialias"][0]))
     out["march"] = str(merged["march"]).lower()
-    for key in ("max_distance", "resolution", "steps", "thickness"):
+    for key in ("max_distance", "resolution", "steps", "antialias", "thickness"):
         default, lo, hi = PARAMETERS[key][:3]
         v = out[key]
         if not (lo <= v <= hi):
