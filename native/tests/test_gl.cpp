@@ -252,12 +252,15 @@ TEST(GlParity, HizAntialiasedOutlinesMatchTheCpu) {
   // The outline pixels' extra rays (march_hiz.cpp) on the GL passes, with
   // every pixel's own ray and with the reuse of rays. The pixels they change
   // are a few percent of the frame: compared on their own too, so that a GL
-  // trace that skipped them could not pass on the whole frame's share.
+  // trace that skipped them could not pass on the whole frame's share. The
+  // perspective view without its specular buffer (every surface a mirror:
+  // outlines everywhere), the orthographic one with it (glossy surfaces,
+  // whose outlines the cone blur spreads: few or no extra rays, on both).
   GLINT_REQUIRE_GL(gl);
   auto cpu = make_cpu_backend();
   for (bool ortho : {false, true}) {
     const test::GBuffer g = scene(ortho, 160, 90);
-    const TraceInputs in{g.position, g.normal, &g.specular, g.projection};
+    const TraceInputs in{g.position, g.normal, ortho ? &g.specular : nullptr, g.projection};
     for (float resolution : {1.0f, 0.3f}) {
       for (int antialias : {1, 4}) {
         TraceOptions o;
@@ -283,11 +286,9 @@ TEST(GlParity, HizAntialiasedOutlinesMatchTheCpu) {
         const double share = agreement(a, b, 1e-4f, 1e-3f), changed = agreement(ca, cb, 1e-4f, 1e-3f);
         std::printf("trace hiz %s resolution %.1f antialias %d: %.4f of pixels agree, %.4f of the %d changed\n",
                     ortho ? "ortho" : "persp", resolution, antialias, share, changed, ca.width);
-        // The orthographic view's reflections show only a couple of outline
-        // pixels that change; the perspective one's, a hundred and more.
-        EXPECT_GE(ca.width, ortho ? 1 : 50) << "the outlines should change some pixels";
+        if (!ortho) EXPECT_GE(ca.width, 50) << "the outlines should change some pixels";
         EXPECT_GE(share, 0.99);
-        EXPECT_GE(changed, 0.99);
+        if (ca.width > 0) EXPECT_GE(changed, 0.99);
       }
     }
   }

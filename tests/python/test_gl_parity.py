@@ -253,13 +253,16 @@ def analytic_back_layer(name, w, h):
 @pytest.mark.parametrize("occluder", [False, True], ids=["plain", "back-occluder"])
 @pytest.mark.parametrize("resolution", [1.0, 0.3], ids=["every-ray", "reused-rays"])
 @pytest.mark.parametrize("antialias", [1, 4])
-@pytest.mark.parametrize("name,w,h,gated", [("persp", 160, 90, False), ("ortho-rough", 128, 96, True)])
-def test_hiz_antialias_matches_cpu(gl, name, w, h, gated, antialias, resolution, occluder, artifacts):
+@pytest.mark.parametrize("name,w,h,gated,least", [("persp", 160, 90, False, 50), ("ortho", 128, 96, True, 10),
+                                                  ("ortho-rough", 128, 96, True, 0)])
+def test_hiz_antialias_matches_cpu(gl, name, w, h, gated, least, antialias, resolution, occluder, artifacts):
     """The outline pixels' extra rays (march_hiz.cpp, *Antialiased outlines*)
     on the GL passes against the CPU's, where the mirror floor shows the
     sphere's, the box's and the wall's outlines. The pixels the outlines
     change are a few percent of the frame, so they are also compared on
-    their own: a GL trace that skipped them would still pass on the whole."""
+    their own: a GL trace that skipped them would still pass on the whole.
+    On the glossy floor (gated by its specular) the cone blur spreads every
+    outline over more than a pixel, and neither backend adds rays there."""
     g = gbuffer(gl, name, w, h)
     kw = dict(march="hiz", resolution=resolution, specular=g["specular"] if gated else None)
     if occluder:
@@ -271,13 +274,14 @@ def test_hiz_antialias_matches_cpu(gl, name, w, h, gated, antialias, resolution,
     assert out.dtype == np.float32 and out.shape == (h, w, 4)
     assert np.isfinite(out).all()
     changed = (cpu != plain).any(axis=-1)
-    assert changed.sum() >= 50, "the outlines should change some pixels"
+    assert changed.sum() >= least, "the outlines should change some pixels"
     if occluder:
         assert ((cpu[..., 2] > 0) & (cpu[..., 3] <= 0)).sum() >= 5, "the scene should block some rays"
     label = f"trace hiz antialias={antialias} {name} {w}x{h} res={resolution}{' occluder' if occluder else ''}"
     report(label, share_trace(cpu, out), TRACE_SHARE, artifacts, cpu, out)
-    report(f"{label} ({int(changed.sum())} changed pixels)", share_trace(cpu[changed], out[changed]),
-           TRACE_SHARE, artifacts, cpu, out)
+    if changed.any():
+        report(f"{label} ({int(changed.sum())} changed pixels)", share_trace(cpu[changed], out[changed]),
+               TRACE_SHARE, artifacts, cpu, out)
 
 
 # --- the rasterizer ---------------------------------------------------------------------

@@ -4,10 +4,13 @@
 // frame, the outline's appended to hiz_outline.glsl's list. A pixel is on a
 // reflection's outline when its report is a hit and a neighbour's on the
 // same surface a miss, or the other way round. The reports are compared
-// first, so most pixels never read the G-buffer. Rows of 64 pixels per
-// group, as trace_hiz_fill.comp found fastest on llvmpipe.
+// first, so most pixels never read the G-buffer. A pixel whose reflection
+// the cone blur spreads over more than a pixel there is not listed (the
+// blur smooths that edge already). Rows of 64 pixels per group, as
+// trace_hiz_fill.comp found fastest on llvmpipe.
 #include "common.glsl"
 #include "trace_common.glsl"
+#include "look_common.glsl"
 #include "hiz_outline.glsl"
 
 layout(local_size_x = 64) in;
@@ -45,20 +48,44 @@ bool differs(ivec2 q, int r) {
   return rq != REPORT_OTHER && rq != r;
 }
 
+// cone_lod_at() > 0 (glint/material.h, as cone_blur.frag computes it): the
+// cone's footprint at hit report t, seen from pixel c of specular s, spans
+// more than a pixel.
+bool blurred(ivec2 c, vec4 s, vec4 t) {
+  if (!u_has_specular) return false;
+  if (!(t.z > 0.0) || !finite_f(t.x) || !finite_f(t.y)) return false;
+  float alpha = look_ggx_alpha(s);
+  if (!(alpha > 0.0)) return false;
+  precise float dx = t.x * u_size.x - (float(c.x) + 0.5);
+  precise float dy = t.y * u_size.y - (float(c.y) + 0.5);
+  precise float len = sqrt(dx * dx + dy * dy);
+  precise float footprint = 2.0 * len * look_cone_tan(alpha);
+  return footprint > 1.0;
+}
+
+// Neighbour q differs (differs()), lies on the same surface, and the
+// reflection of pixel c is sharp at the pair's hit.
+bool sharp_pair(ivec2 c, vec4 own, int r, vec4 p, vec3 n, vec4 s, bool d, ivec2 q) {
+  if (!d || !same_surface(p, n, q)) return false;
+  return !blurred(c, s, r == REPORT_HIT ? own : imageLoad(u_out, q));
+}
+
 // The four neighbours written out, not as an array: llvmpipe keeps a
 // loop-indexed local array in memory (trace_hiz_fill.comp says more).
 bool on_outline(ivec2 c) {
-  int r = report_of(imageLoad(u_out, c));
+  vec4 own = imageLoad(u_out, c);
+  int r = report_of(own);
   if (r == REPORT_OTHER) return false;
   ivec2 q0 = c - ivec2(1, 0), q1 = c + ivec2(1, 0), q2 = c - ivec2(0, 1), q3 = c + ivec2(0, 1);
   bool d0 = differs(q0, r), d1 = differs(q1, r), d2 = differs(q2, r), d3 = differs(q3, r);
   if (!(d0 || d1 || d2 || d3)) return false;
-  if (u_has_specular && !is_reflective(imageLoad(u_specular_img, c))) return false;
+  vec4 s = u_has_specular ? imageLoad(u_specular_img, c) : vec4(0.0);
+  if (u_has_specular && !is_reflective(s)) return false;
   vec4 p = imageLoad(u_position_img, c);
   vec3 n = imageLoad(u_normal_img, c).xyz;
   if (!texel_seen(p) || !finite_v3(p.xyz) || !finite_v3(n)) return false;
-  return (d0 && same_surface(p, n, q0)) || (d1 && same_surface(p, n, q1)) || (d2 && same_surface(p, n, q2)) ||
-         (d3 && same_surface(p, n, q3));
+  return sharp_pair(c, own, r, p, n, s, d0, q0) || sharp_pair(c, own, r, p, n, s, d1, q1) ||
+         sharp_pair(c, own, r, p, n, s, d2, q2) || sharp_pair(c, own, r, p, n, s, d3, q3);
 }
 
 void main() {

@@ -579,11 +579,15 @@ inline Report report_of(const float* o) {
 }
 
 // Pixel (x, y) is on a reflection's outline when its report is a hit and a
-// neighbour's on the same surface a miss, or the other way round.
+// neighbour's on the same surface a miss, or the other way round, and the
+// pixel's reflection is sharp there: where the cone blur's footprint at the
+// hit spans more than a pixel (cone_lod_at() > 0), the blur already spreads
+// the edge over it, and rays inside the pixel would buy nothing.
 // `reports` holds report_of() of every pixel, a byte each. They are compared
 // first: most pixels agree with all four neighbours, and the G-buffer is then
 // never read.
-bool on_outline(const TraceInputs& in, const unsigned char* reports, int width, int height, int x, int y) {
+bool on_outline(const TraceInputs& in, const Image& out, const unsigned char* reports, int x, int y) {
+  const int width = out.width, height = out.height;
   const auto report = [&](int i, int j) { return static_cast<Report>(reports[static_cast<size_t>(j) * width + i]); };
   const Report r = report(x, y);
   if (r == Report::Other) return false;
@@ -601,8 +605,12 @@ bool on_outline(const TraceInputs& in, const unsigned char* reports, int width, 
   const float* p = in.position.px(x, y);
   const float* n = in.normal.px(x, y);
   if (!texel_seen(p) || !finite(V3{p[0], p[1], p[2]}) || !finite(V3{n[0], n[1], n[2]})) return false;
-  for (int k = 0; k < 4; ++k)
-    if (differs[k] && same_surface(in, p, n, nb[k][0], nb[k][1])) return true;
+  const float* spec = in.specular ? in.specular->px(x, y) : nullptr;
+  for (int k = 0; k < 4; ++k) {
+    if (!differs[k] || !same_surface(in, p, n, nb[k][0], nb[k][1])) continue;
+    const float* hit = r == Report::Hit ? out.px(x, y) : out.px(nb[k][0], nb[k][1]);
+    if (!spec || !(cone_lod_at(x, y, width, height, hit, spec) > 0.0f)) return true;
+  }
   return false;
 }
 
@@ -752,7 +760,7 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
   std::vector<std::vector<int>> edges(static_cast<size_t>(out.height));
   parallel_rows(0, out.height, threads, [&](int y) {
     for (int x = 0; x < out.width; ++x)
-      if (on_outline(in, reports.data(), out.width, out.height, x, y)) edges[y].push_back(x);
+      if (on_outline(in, out, reports.data(), x, y)) edges[y].push_back(x);
   });
   const int k = std::min(opt.antialias, 4);
   const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
