@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "cpu/outline.h"
 #include "cpu/ray.h"
 #include "exact.h"
 #include "glint/errors.h"
@@ -432,7 +433,19 @@ class ExactScene::Impl {
   template <int K>
   void first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const;
   // The mirror rays of row y, then the rays back to the camera from their hits.
+  // A mirror ray and where its report goes.
+  struct MirrorRay {
+    V3 from, unit_from, normal;
+    float* out;
+  };
+  // Each ray's report into its `out`, (0, 0, 0, 0) where it finds nothing
+  // the camera sees.
+  void trace_rays(const Frame& frame, const MarchSetup& s, const std::vector<MirrorRay>& rays) const;
   void trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y, Image& out) const;
+  // antialias > 0: the outline pixels of row y (cpu::outline_pixels()),
+  // each with k more rays from inside it, resolved into `out`.
+  void antialias_row(const Frame& frame, const MarchSetup& s, const Mat4& inverse_projection, int y,
+                     const std::vector<int>& edges, int k, Image& out) const;
 
   mutable std::mutex summary_mu;
   Summary summary;
@@ -547,19 +560,87 @@ Sight camera_ray(const MarchSetup& s, D3 hit, Query& back) {
 
 void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y,
                                  Image& out) const {
-  using cpu::clip_row;
-  std::vector<Query> mirror, back;
-  std::vector<int> mirror_x, back_x;
+  std::vector<MirrorRay> rays;
   for (int x = 0; x < out.width; ++x) {
     float* o = out.px(x, y);
     o[0] = o[1] = o[2] = o[3] = 0.0f;
     if (specular && !is_reflective(specular->px(x, y))) continue;
     V3 from, unit_from, normal;
     if (!cpu::read_origin(s, x, y, from, unit_from, normal)) continue;
-    const V3 pivot = cpu::normalize(cpu::reflect(unit_from, normal));
+    rays.push_back(MirrorRay{from, unit_from, normal, o});
+  }
+  trace_rays(frame, s, rays);
+}
+
+namespace {
+
+// Where the camera's ray through point (px, py) of the image (pixels) meets
+// the plane through `p` with normal `n`, in view space: false where the plane
+// is seen edge-on, or the point leaves the pixel's depth range as hiz's
+// base_range() bounds it.
+bool on_pixel_plane(const Mat4& inv, int w, int h, double px, double py, V3 p, V3 n, V3& at) {
+  const double sx = px * (2.0 / w) - 1.0, sy = py * (2.0 / h) - 1.0;
+  D3 e[2];
+  for (int k = 0; k < 2; ++k) {  // NDC depths -1 (near) and 0: both finite for any camera
+    const double sz = k == 0 ? -1.0 : 0.0;
+    double v[4];
+    for (int r = 0; r < 4; ++r)
+      v[r] = inv.m[4 * r] * sx + inv.m[4 * r + 1] * sy + inv.m[4 * r + 2] * sz + inv.m[4 * r + 3];
+    e[k] = {v[0] / v[3], v[1] / v[3], v[2] / v[3]};
+  }
+  const D3 d{e[1].x - e[0].x, e[1].y - e[0].y, e[1].z - e[0].z};
+  const double nd = n.x * d.x + n.y * d.y + n.z * d.z;
+  const double t = (n.x * (p.x - e[0].x) + n.y * (p.y - e[0].y) + n.z * (p.z - e[0].z)) / nd;
+  const D3 q = e[0] + d * t;
+  if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) return false;
+  if (!(std::fabs(q.z - p.z) <= hiz::kFootprintSpread * std::fabs(p.z))) return false;
+  at = {float(q.x), float(q.y), float(q.z)};
+  return true;
+}
+
+}  // namespace
+
+void ExactScene::Impl::antialias_row(const Frame& frame, const MarchSetup& s, const Mat4& inverse_projection,
+                                     int y, const std::vector<int>& edges, int k, Image& out) const {
+  if (edges.empty()) return;
+  const int w = out.width, h = out.height;
+  std::vector<float> samples(edges.size() * static_cast<size_t>(k) * 4);
+  std::vector<MirrorRay> rays;
+  for (size_t e = 0; e < edges.size(); ++e) {
+    const int x = edges[e];
+    const float* c = out.px(x, y);
+    V3 from, unit_from, normal;
+    const bool origin = cpu::read_origin(s, x, y, from, unit_from, normal);
+    for (int j = 0; j < k; ++j) {
+      float* o = samples.data() + (e * k + j) * 4;
+      o[0] = c[0], o[1] = c[1], o[2] = c[2], o[3] = c[3];  // a sample without a ray of its own
+      V3 at, incident;
+      if (!origin ||
+          !on_pixel_plane(inverse_projection, w, h, x + 0.5 + cpu::kAaOffset[j][0], y + 0.5 + cpu::kAaOffset[j][1],
+                          from, normal, at) ||
+          !cpu::incident_direction(s, at, incident))
+        continue;
+      rays.push_back(MirrorRay{at, incident, normal, o});
+    }
+  }
+  trace_rays(frame, s, rays);
+  for (size_t e = 0; e < edges.size(); ++e) {
+    float* o = out.px(edges[e], y);
+    cpu::resolve_outline(o, samples.data() + e * k * 4, k, static_cast<float>(w), static_cast<float>(h), o);
+  }
+}
+
+void ExactScene::Impl::trace_rays(const Frame& frame, const MarchSetup& s, const std::vector<MirrorRay>& rays) const {
+  using cpu::clip_row;
+  std::vector<Query> mirror, back;
+  std::vector<float*> mirror_x, back_x;
+  for (const MirrorRay& r : rays) {
+    float* o = r.out;
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    const V3 pivot = cpu::normalize(cpu::reflect(r.unit_from, r.normal));
     if (!cpu::finite(pivot)) continue;
-    mirror.push_back(Query{d3(from), d3(pivot), s.opt.max_distance});
-    mirror_x.push_back(x);
+    mirror.push_back(Query{d3(r.from), d3(pivot), s.opt.max_distance});
+    mirror_x.push_back(o);
   }
   first_hits(frame, mirror, Own::Skip);
   for (size_t i = 0; i < mirror.size(); ++i) {
@@ -581,13 +662,13 @@ void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const 
       back_x.push_back(mirror_x[i]);
     }
     // Written now, taken back below where a surface hides the hit.
-    float* o = out.px(mirror_x[i], y);
+    float* o = mirror_x[i];
     o[0] = float(u), o[1] = float(v), o[2] = o[3] = 1.0f;
   }
   first_hits(frame, back, Own::Retry);
   for (size_t i = 0; i < back.size(); ++i) {
     if (!back[i].found) continue;
-    float* o = out.px(back_x[i], y);
+    float* o = back_x[i];
     o[0] = o[1] = o[2] = o[3] = 0.0f;
   }
 }
@@ -604,6 +685,14 @@ Image ExactScene::Impl::trace(const TraceInputs& in, const TraceOptions& opt, co
   Image out = Image::uninitialized(in.position.width, in.position.height);
   parallel_rows(0, out.height, threads, [&](int y) { trace_row(frame, setup, in.specular, y, out); });
   errors_.rethrow();
+  if (opt.antialias > 0) {
+    // A row writes only its own outline pixels, which no other row reads by then.
+    const std::vector<std::vector<int>> edges = cpu::outline_pixels(in, out, threads);
+    const Mat4 inv = inverse(in.projection);
+    const int k = std::min(opt.antialias, 4);
+    parallel_rows(0, out.height, threads, [&](int y) { antialias_row(frame, setup, inv, y, edges[y], k, out); });
+    errors_.rethrow();
+  }
   return out;
 }
 

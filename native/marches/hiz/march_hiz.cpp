@@ -24,6 +24,7 @@
 #include <limits>
 #include <vector>
 
+#include "cpu/outline.h"
 #include "cpu/ray.h"
 #include "glint/errors.h"
 #include "glint/marches.h"
@@ -45,8 +46,6 @@ constexpr float kUncertain = hiz::kUncertain;
 constexpr float kEnteredHidden = hiz::kEnteredHidden;
 constexpr float kHiddenShare = hiz::kHiddenShare;
 constexpr float kFootprintSpread = hiz::kFootprintSpread;
-constexpr float kReuseCos = hiz::kReuseCos;
-constexpr float kReuseDepth = hiz::kReuseDepth;
 constexpr float kReusePixels = hiz::kReusePixels;
 // Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
 constexpr int kMaxLevels = 32;
@@ -487,20 +486,6 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 
 namespace {
 
-// Whether pixel (qx, qy) reflects and lies on the same smooth surface as the
-// pixel at position p with normal n: normals within kReuseCos, view distances
-// within kReuseDepth of each other.
-bool same_surface(const TraceInputs& in, const float* p, const float* n, int qx, int qy) {
-  if (in.specular && !is_reflective(in.specular->px(qx, qy))) return false;
-  const float* pq = in.position.px(qx, qy);
-  const float* nq = in.normal.px(qx, qy);
-  if (!texel_seen(pq) || !(std::fabs(pq[2] - p[2]) <= kReuseDepth * std::fabs(p[2]))) return false;
-  const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  const float d = n[0] * nq[0] + n[1] * nq[1] + n[2] * nq[2];
-  const float qq = nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2];
-  return d > 0.0f && d * d >= kReuseCos * kReuseCos * nn * qq;
-}
-
 // Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
 // would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
 // same smooth surface (reflective, normals within kReuseCos, view distances
@@ -569,51 +554,6 @@ bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4])
 
 // --- Antialiased outlines (docs/marches.md) --------------------------------
 
-// A pixel's report as the outline test sees it: a hit (visibility in the
-// fourth channel), a plain miss, or anything else (a blocked ray's occluder),
-// which is left as it is.
-enum class Report { Miss, Hit, Other };
-inline Report report_of(const float* o) {
-  if (o[3] > 0.0f) return Report::Hit;
-  return o[2] == 0.0f && o[3] == 0.0f ? Report::Miss : Report::Other;
-}
-
-// Pixel (x, y) is on a reflection's outline when its report is a hit and a
-// neighbour's on the same surface a miss, or the other way round, and the
-// pixel's reflection is sharp there: where the cone blur's footprint at the
-// hit spans more than a pixel (cone_lod_at() > 0), the blur already spreads
-// the edge over it, and rays inside the pixel would buy nothing.
-// `reports` holds report_of() of every pixel, a byte each. They are compared
-// first: most pixels agree with all four neighbours, and the G-buffer is then
-// never read.
-bool on_outline(const TraceInputs& in, const Image& out, const unsigned char* reports, int x, int y) {
-  const int width = out.width, height = out.height;
-  const auto report = [&](int i, int j) { return static_cast<Report>(reports[static_cast<size_t>(j) * width + i]); };
-  const Report r = report(x, y);
-  if (r == Report::Other) return false;
-  const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
-  bool differs[4] = {false, false, false, false};
-  bool any = false;
-  for (int k = 0; k < 4; ++k) {
-    const int* q = nb[k];
-    if (q[0] < 0 || q[1] < 0 || q[0] >= width || q[1] >= height) continue;
-    const Report rq = report(q[0], q[1]);
-    any |= differs[k] = rq != Report::Other && rq != r;
-  }
-  if (!any) return false;
-  if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
-  const float* p = in.position.px(x, y);
-  const float* n = in.normal.px(x, y);
-  if (!texel_seen(p) || !finite(V3{p[0], p[1], p[2]}) || !finite(V3{n[0], n[1], n[2]})) return false;
-  const float* spec = in.specular ? in.specular->px(x, y) : nullptr;
-  for (int k = 0; k < 4; ++k) {
-    if (!differs[k] || !same_surface(in, p, n, nb[k][0], nb[k][1])) continue;
-    const float* hit = r == Report::Hit ? out.px(x, y) : out.px(nb[k][0], nb[k][1]);
-    if (!spec || !(cone_lod_at(x, y, width, height, hit, spec) > 0.0f)) return true;
-  }
-  return false;
-}
-
 // The ray of pixel (x, y) from offset (ox, oy) pixels off its centre: from
 // where the view ray through that point meets the texel's tangent plane,
 // mirrored about the pixel's shading normal. False where the plane is seen
@@ -638,12 +578,6 @@ bool subpixel_ray(const MarchSetup& s, const HizPlanes& planes, const HizCamera&
   return make_ray_from(s, at, unit_from, normal, r);
 }
 
-// The rotated grid (glint/schema.h): sample k's offset from the centre.
-constexpr float kAaOffset[4][2] = {{-hiz::kAntialiasNear, -hiz::kAntialiasFar},
-                                   {hiz::kAntialiasFar, -hiz::kAntialiasNear},
-                                   {hiz::kAntialiasNear, hiz::kAntialiasFar},
-                                   {-hiz::kAntialiasFar, hiz::kAntialiasNear}};
-
 // The walk's start for the outline samples: job j is sample j % per_pixel of
 // pixel edges[j / per_pixel] in row y. A sample without a ray of its own
 // keeps the centre's report.
@@ -665,35 +599,6 @@ bool sample_start(void* ctx, int lane, WalkRay& w) {
   return false;
 }
 
-// The pixel's report from its centre c and its k samples, the box filter of
-// the k + 1: visibility is the hits' share of them, and the uv their
-// visibility-weighted mean. Only where every hit lies within kReusePixels of
-// the first (one object's outline against a miss) and nothing else was
-// reported; elsewhere `o` keeps the centre's report.
-void resolve_outline(const float* c, const float* samples, int k, float w, float h, float* o) {
-  const float* ref = c[3] > 0.0f ? c : nullptr;
-  for (int j = 0; j < k && !ref; ++j)
-    if (samples[4 * j + 3] > 0.0f) ref = samples + 4 * j;
-  if (!ref) return;
-  float su = 0.0f, sv = 0.0f, sw = 0.0f;
-  auto add = [&](const float* s) {
-    const Report r = report_of(s);
-    if (r != Report::Hit) return r == Report::Miss;
-    const float du = (s[0] - ref[0]) * w, dv = (s[1] - ref[1]) * h;
-    if (!(du * du + dv * dv <= kReusePixels * kReusePixels)) return false;
-    su += s[3] * s[0];
-    sv += s[3] * s[1];
-    sw += s[3];
-    return true;
-  };
-  if (!add(c)) return;
-  for (int j = 0; j < k; ++j)
-    if (!add(samples + 4 * j)) return;
-  const float vis = sw / static_cast<float>(k + 1);
-  o[0] = su / sw;
-  o[1] = sv / sw;
-  o[2] = o[3] = vis;
-}
 
 }  // namespace
 
@@ -752,16 +657,7 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
   // The outlines: found on the whole frame first, then each row's samples
   // walked and resolved (a row writes only its own pixels, which no other
   // row reads by then).
-  std::vector<unsigned char> reports(out.pixel_count());
-  parallel_rows(0, out.height, threads, [&](int y) {
-    unsigned char* row = reports.data() + static_cast<size_t>(y) * out.width;
-    for (int x = 0; x < out.width; ++x) row[x] = static_cast<unsigned char>(report_of(out.px(x, y)));
-  });
-  std::vector<std::vector<int>> edges(static_cast<size_t>(out.height));
-  parallel_rows(0, out.height, threads, [&](int y) {
-    for (int x = 0; x < out.width; ++x)
-      if (on_outline(in, out, reports.data(), x, y)) edges[y].push_back(x);
-  });
+  const std::vector<std::vector<int>> edges = outline_pixels(in, out, threads);
   const int k = std::min(opt.antialias, 4);
   const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
   parallel_rows(0, out.height, threads, [&](int y) {
