@@ -24,7 +24,10 @@ minus its stages and clear). Usage, from a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/frame_bench.py -- \
       [--size 1920x1080] [--rounds 3] [--samples 8] [--preset BALANCED] [--backend AUTO] \
-      [--scenes matte,default] [--addon <folder holding glint/>]
+      [--scenes matte,default] [--addon <folder holding glint/>] [--antialias N]
+
+--antialias N sets the add-on's Antialias to N after the preset (the preset's other
+values stay, the panel shows Custom); without it the preset's own value counts.
 
 The add-on is registered from this checkout (or --addon, e.g. an older commit's
 ``git archive`` to compare); the core comes from GLINT_CORE_PATH
@@ -50,9 +53,9 @@ ROOT = os.path.dirname(HERE)
 def _args():
     return kit.script_options(
         {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO",
-         "scenes": ["matte", "default"], "addon": os.path.join(ROOT, "addon")},
+         "scenes": ["matte", "default"], "addon": os.path.join(ROOT, "addon"), "antialias": -1},
         {"size": kit.frame_size, "rounds": int, "samples": int, "preset": str.upper, "backend": str.upper,
-         "scenes": kit.names_among(SCENES, "scenes"), "addon": os.path.abspath})
+         "scenes": kit.names_among(SCENES, "scenes"), "addon": os.path.abspath, "antialias": int})
 
 
 SCENES = ("matte", "default")
@@ -120,6 +123,8 @@ def configure(scene, mode, opts):
     g = scene.glint
     if mode == "glint":
         g.preset = opts["preset"]
+        if opts["antialias"] >= 0:
+            g.antialias = opts["antialias"]
         g.backend = opts["backend"]
         g.enabled = True
     else:
@@ -181,7 +186,9 @@ def bench_scene(opts, materials):
     w, h = opts["size"]
     print(f"\nframe_bench: scene {materials}, Blender {bpy.app.version_string}, {w}x{h} Eevee, "
           f"{opts['samples']} samples, {tris} triangles, "
-          f"preset {opts['preset']}, backend {opts['backend']} -> {'/'.join(sorted(backends))}, "
+          f"preset {opts['preset']}"
+          f"{'' if opts['antialias'] < 0 else ' with antialias ' + str(opts['antialias'])}, "
+          f"backend {opts['backend']} -> {'/'.join(sorted(backends))}, "
           f"medians of {opts['rounds']} rounds")
     print(f"  render, plain             {med['plain']:8.0f} ms")
     own = "Eevee " + kit.eevee_reflections_name(scene)
