@@ -249,7 +249,7 @@ TEST(GlParity, TraceMatchesTheCpuOnPerspectiveAndOrthographicScenes) {
 }
 
 TEST(GlParity, HizAntialiasedOutlinesMatchTheCpu) {
-  // The outline pixels' extra rays (march_hiz.cpp) on the GL passes, with
+  // The outline pixels' extra rays (march_hiz.cpp, cpu/outline.cpp) on the GL passes, with
   // every pixel's own ray and with the reuse of rays. The pixels they change
   // are a few percent of the frame: compared on their own too, so that a GL
   // trace that skipped them could not pass on the whole frame's share. The

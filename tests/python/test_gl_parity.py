@@ -256,7 +256,7 @@ def analytic_back_layer(name, w, h):
 @pytest.mark.parametrize("name,w,h,gated,least", [("persp", 160, 90, False, 50), ("ortho", 128, 96, True, 10),
                                                   ("ortho-rough", 128, 96, True, 0)])
 def test_hiz_antialias_matches_cpu(gl, name, w, h, gated, least, antialias, resolution, occluder, artifacts):
-    """The outline pixels' extra rays (march_hiz.cpp, *Antialiased outlines*)
+    """The outline pixels' extra rays (march_hiz.cpp and cpu/outline.cpp, *Antialiased outlines*)
     on the GL passes against the CPU's, where the mirror floor shows the
     sphere's, the box's and the wall's outlines. The pixels the outlines
     change are a few percent of the frame, so they are also compared on

@@ -1,5 +1,5 @@
-// The hiz march's antialiased outlines (march_hiz.cpp, "Antialiased
-// outlines"), what their passes share. hiz_outline_find.comp lists the pixels
+// The hiz march's antialiased outlines (native/src/cpu/outline.cpp and
+// march_hiz.cpp on the CPU; docs/marches.md), what their passes share. hiz_outline_find.comp lists the pixels
 // on a reflection's outline; hiz_outline_args.comp sizes the two dispatches
 // of each batch; hiz_outline_trace.comp writes the reports of their extra
 // rays (u_per_pixel per listed pixel) and hiz_outline_resolve.comp filters
@@ -38,7 +38,7 @@ uint invocation_index() {
 
 ivec2 unpack_pixel(uint p) { return ivec2(int(p & 0xffffu), int(p >> 16)); }
 
-// report_of() in march_hiz.cpp: a hit (visibility in the fourth channel), a
+// report_of() in native/src/cpu/outline.h: a hit (visibility in the fourth channel), a
 // plain miss, or anything else (a blocked ray's occluder), left as it is.
 const int REPORT_MISS = 0;
 const int REPORT_HIT = 1;

@@ -1,6 +1,6 @@
 #version 430 core
 // The hiz march's antialiased outlines, first pass (on_outline() in
-// march_hiz.cpp, same tests on the same values): every pixel of the traced
+// native/src/cpu/outline.cpp, same tests on the same values): every pixel of the traced
 // frame, the outline's appended to hiz_outline.glsl's list. A pixel is on a
 // reflection's outline when its report is a hit and a neighbour's on the
 // same surface a miss, or the other way round. The reports are compared
@@ -22,7 +22,7 @@ layout(rgba32f, binding = 1) uniform readonly image2D u_position_img;
 layout(rgba32f, binding = 2) uniform readonly image2D u_normal_img;
 layout(rgba32f, binding = 3) uniform readonly image2D u_specular_img;  // read when u_has_specular
 
-// same_surface() in march_hiz.cpp, the test of trace_hiz_fill.comp's
+// same_surface() in native/src/cpu/outline.cpp, the test of trace_hiz_fill.comp's
 // on_surface() for a neighbour q known to be in the frame: q reflects, its
 // view distance is within REUSE_DEPTH of p's and its normal within REUSE_COS
 // of n.

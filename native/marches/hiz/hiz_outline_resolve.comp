@@ -1,6 +1,6 @@
 #version 430 core
 // The hiz march's antialiased outlines, last pass (resolve_outline() in
-// march_hiz.cpp, same operations in the same order): an invocation per
+// native/src/cpu/outline.cpp, same operations in the same order): an invocation per
 // listed pixel of the batch (hiz_outline.glsl), its report in the frame
 // replaced by the box filter of its centre and its u_per_pixel samples. Only
 // where every hit lies within REUSE_PIXELS of the first and nothing but hits

@@ -14,7 +14,7 @@ layout(local_size_x = 64) in;  // OUTLINE_GROUP
 
 layout(rgba32f, binding = 0) uniform readonly image2D u_out;  // the traced frame: the centres' reports
 
-// kAaOffset in march_hiz.cpp: the rotated grid (glint/schema.h), sample k's
+// kAaOffset in native/src/cpu/outline.h: the rotated grid (glint/schema.h), sample k's
 // offset from the pixel's centre in pixels.
 const vec2 AA_OFFSET[4] = vec2[4](vec2(-ANTIALIAS_NEAR, -ANTIALIAS_FAR), vec2(ANTIALIAS_FAR, -ANTIALIAS_NEAR),
                                   vec2(ANTIALIAS_NEAR, ANTIALIAS_FAR), vec2(-ANTIALIAS_FAR, ANTIALIAS_NEAR));
