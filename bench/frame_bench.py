@@ -24,10 +24,11 @@ minus its stages and clear). Usage, from a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/frame_bench.py -- \
       [--size 1920x1080] [--rounds 3] [--samples 8] [--preset BALANCED] [--backend AUTO] \
-      [--scenes matte,default] [--addon <folder holding glint/>] [--antialias N]
+      [--scenes matte,default] [--addon <folder holding glint/>] [--antialias N] [--hidden-sides 0|1]
 
 --antialias N sets the add-on's Antialias to N after the preset (the preset's other
 values stay, the panel shows Custom); without it the preset's own value counts.
+--hidden-sides 0 turns Hidden Sides in Their Colour off (1, the default, on).
 
 The add-on is registered from this checkout (or --addon, e.g. an older commit's
 ``git archive`` to compare); the core comes from GLINT_CORE_PATH
@@ -53,9 +54,11 @@ ROOT = os.path.dirname(HERE)
 def _args():
     return kit.script_options(
         {"size": (1920, 1080), "rounds": 3, "samples": 8, "preset": "BALANCED", "backend": "AUTO",
-         "scenes": ["matte", "default"], "addon": os.path.join(ROOT, "addon"), "antialias": -1},
+         "scenes": ["matte", "default"], "addon": os.path.join(ROOT, "addon"), "antialias": -1,
+         "hidden-sides": 1},
         {"size": kit.frame_size, "rounds": int, "samples": int, "preset": str.upper, "backend": str.upper,
-         "scenes": kit.names_among(SCENES, "scenes"), "addon": os.path.abspath, "antialias": int})
+         "scenes": kit.names_among(SCENES, "scenes"), "addon": os.path.abspath, "antialias": int,
+         "hidden-sides": int})
 
 
 SCENES = ("matte", "default")
@@ -123,8 +126,10 @@ def configure(scene, mode, opts):
     g = scene.glint
     if mode == "glint":
         g.preset = opts["preset"]
-        if opts["antialias"] >= 0:
+        if opts.get("antialias", -1) >= 0:
             g.antialias = opts["antialias"]
+        if hasattr(g, "hidden_sides"):  # an add-on from before them (--addon) has none
+            g.hidden_sides = bool(opts.get("hidden-sides", 1))
         g.backend = opts["backend"]
         g.enabled = True
     else:
@@ -187,7 +192,8 @@ def bench_scene(opts, materials):
     print(f"\nframe_bench: scene {materials}, Blender {bpy.app.version_string}, {w}x{h} Eevee, "
           f"{opts['samples']} samples, {tris} triangles, "
           f"preset {opts['preset']}"
-          f"{'' if opts['antialias'] < 0 else ' with antialias ' + str(opts['antialias'])}, "
+          f"{'' if opts['antialias'] < 0 else ' with antialias ' + str(opts['antialias'])}"
+          f"{'' if opts['hidden-sides'] else ', hidden sides off'}, "
           f"backend {opts['backend']} -> {'/'.join(sorted(backends))}, "
           f"medians of {opts['rounds']} rounds")
     print(f"  render, plain             {med['plain']:8.0f} ms")
