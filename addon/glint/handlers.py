@@ -182,7 +182,24 @@ def _notify_ui(message: str, level: str = "ERROR") -> None:
     if bpy.app.background or _job.get("ui_notice") == message:
         return
     _job["ui_notice"] = message
-    STATE.on_main_thread(lambda: _show_report(message, level))
+    STATE.on_main_thread(lambda: _reports_after_render.append((message, level)))
+
+
+# Reports wait for the render job to end. They are shown by calling an operator
+# under a context override, and Blender 3.4.1 looks an override's members up
+# without taking the GIL when another thread holds it: if a render thread is in
+# any add-on's handler at that moment, Blender crashes. (Operators called under
+# an override mid-render crashed the UI test's driver about one F12 in ten.)
+_reports_after_render: list = []
+
+
+def _show_reports_after_render() -> None:
+    if not _reports_after_render or bpy.app.is_job_running("RENDER"):
+        return
+    pending = list(_reports_after_render)
+    _reports_after_render.clear()
+    for message, level in pending:
+        _show_report(message, level)
 
 
 def _report_window(wm):
@@ -230,6 +247,10 @@ def _main_thread_tick():
             fn()
         except Exception:
             traceback.print_exc()
+    try:
+        _show_reports_after_render()
+    except Exception:
+        traceback.print_exc()
     now = time.monotonic()
     if now - _seen["trimmed"] >= TRIM_SECONDS:
         _seen["trimmed"] = now

@@ -38,6 +38,17 @@ def xvfb(blender_ok):
     return XVFB_RUN
 
 
+def crash_report(out: str) -> str:
+    """Blender's own crash report (``<file>.crash.txt`` in TMPDIR, which run_ui sets
+    to ``out``): its backtrace says whose code crashed, which the log cannot."""
+    text = ""
+    for name in sorted(os.listdir(out)):
+        if name.endswith(".crash.txt"):
+            with open(os.path.join(out, name), errors="replace") as f:
+                text += f"\n--- {name}:\n{f.read()[-6000:]}"
+    return text
+
+
 def run_ui(setup, blend, out, config, timeout=150):
     """One Blender session with a window; returns (result dict, log)."""
     os.makedirs(out, exist_ok=True)
@@ -56,7 +67,7 @@ def run_ui(setup, blend, out, config, timeout=150):
         f.write(log)
     path = os.path.join(out, "result.json")
     assert proc.returncode == 0 and os.path.isfile(path), \
-        f"Blender with a window failed or hung (exit {proc.returncode}):\n{log[-4000:]}"
+        f"Blender with a window failed or hung (exit {proc.returncode}):\n{log[-4000:]}{crash_report(out)}"
     with open(path) as f:
         res = json.load(f)
     assert not res["errors"], res["errors"]

@@ -263,12 +263,13 @@ def _tick():
         shown = any(d["progress"] for d in cur["panel_draws"])
         if step.get("cancel_when_busy") and st is not None and st.busy and shown and not state.get("cancelled"):
             # What the panel's "Cancel Glint" button runs, on the main thread, mid-export.
+            # Called with no context override: Blender 3.4 looks a Python override
+            # up without the GIL when another thread runs Python, and a render
+            # thread in a handler then crashes it (see docs/addon.md, *Reports
+            # from a render*). The operator needs no window.
             state["cancelled"] = True
             _event("cancel_glint", progress=st.progress)
-            with _override(_main_window()):
-                bpy.ops.glint.cancel()
-            if SHOTS:
-                _screenshots(f"{i}_busy")
+            bpy.ops.glint.cancel()
         ended = any(e["event"] in ("render_complete", "render_cancel") for e in cur["events"])
         if ended and not bpy.app.is_job_running("RENDER"):
             state.update(phase="settle", settle=time.monotonic())
