@@ -92,7 +92,8 @@ def on_render_init(scene, *args):
     except compositor.SetupIncomplete as exc:
         # New nodes and links are not made from the render thread while the UI
         # may be drawing or evaluating the same trees: the main thread does it.
-        STATE.on_main_thread(lambda name=scene.name: _repair_setup(name))
+        # After the job, too: the render composites with this very tree.
+        STATE.after_render(lambda name=scene.name: _repair_setup(name))
         _skip(scene, f"the compositor set-up was changed ({exc}); Glint restores it now, render again")
         return
     except Exception as exc:  # never let a node-tree problem stop the render
@@ -182,24 +183,11 @@ def _notify_ui(message: str, level: str = "ERROR") -> None:
     if bpy.app.background or _job.get("ui_notice") == message:
         return
     _job["ui_notice"] = message
-    STATE.on_main_thread(lambda: _reports_after_render.append((message, level)))
-
-
-# Reports wait for the render job to end. They are shown by calling an operator
-# under a context override, and Blender 3.4.1 looks an override's members up
-# without taking the GIL when another thread holds it: if a render thread is in
-# any add-on's handler at that moment, Blender crashes. (Operators called under
-# an override mid-render crashed the UI test's driver about one F12 in ten.)
-_reports_after_render: list = []
-
-
-def _show_reports_after_render() -> None:
-    if not _reports_after_render or bpy.app.is_job_running("RENDER"):
-        return
-    pending = list(_reports_after_render)
-    _reports_after_render.clear()
-    for message, level in pending:
-        _show_report(message, level)
+    # After the job: the report is an operator called under a context override,
+    # which Blender 3.4.1 looks up without the GIL when another thread holds it;
+    # a render thread in any add-on's handler at that moment crashes Blender.
+    # (Operators called so mid-render crashed the UI test's driver one F12 in ten.)
+    STATE.after_render(lambda: _show_report(message, level))
 
 
 def _report_window(wm):
@@ -235,22 +223,23 @@ def _redraw_panels() -> None:
 _seen = {"version": -1, "trimmed": 0.0}
 
 
-def _main_thread_tick():
-    """Runs on the main thread: queued work from render threads, panel redraws
-    (status line, progress, the Cancel button) when the state changed."""
+def _run_queue(q) -> None:
     while True:
         try:
-            fn = STATE.main_queue.get_nowait()
+            fn = q.get_nowait()
         except queue.Empty:
             break
         try:
             fn()
         except Exception:
             traceback.print_exc()
-    try:
-        _show_reports_after_render()
-    except Exception:
-        traceback.print_exc()
+
+
+def _main_thread_tick():
+    """Runs on the main thread: queued work from render threads, panel redraws
+    (status line, progress, the Cancel button) when the state changed."""
+    if not bpy.app.is_job_running("RENDER"):
+        _run_queue(STATE.after_render_queue)
     now = time.monotonic()
     if now - _seen["trimmed"] >= TRIM_SECONDS:
         _seen["trimmed"] = now

@@ -3,9 +3,9 @@
 Renders run handlers on a worker thread (F12) or the main thread (``-b``);
 writing to the scene from there would tag the depsgraph mid-render, so the
 results are kept here and the panel reads them. What must happen on Blender's
-main thread (redrawing the panel, a pop-up, a report, repairing the compositor
-set-up) is queued with :meth:`_State.on_main_thread`; ``handlers`` runs the
-queue from a timer.
+main thread (a report, repairing the compositor set-up) is queued with
+:meth:`_State.after_render`, which also waits for the render job to end;
+``handlers`` runs the queue from a timer, which also redraws the panel.
 """
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ class _State:
         self.progress = ""
         # Bumped on every change the panel shows: the main thread redraws on a change.
         self.version = 0
-        self.main_queue: "queue.SimpleQueue[Callable[[], None]]" = queue.SimpleQueue()
+        self.after_render_queue: "queue.SimpleQueue[Callable[[], None]]" = queue.SimpleQueue()
         # The last frame's arrays (position, normal, specular, uv, projection),
         # for the debug operators and for tests that inspect an export.
         self.arrays: Dict[str, object] = {}
@@ -74,9 +74,11 @@ class _State:
         with self.lock:
             self.version += 1
 
-    def on_main_thread(self, fn: Callable[[], None]) -> None:
-        """Run ``fn`` on Blender's main thread soon (from any thread)."""
-        self.main_queue.put(fn)
+    def after_render(self, fn: Callable[[], None]) -> None:
+        """Run ``fn`` on Blender's main thread once no render job is running
+        (from any thread): for work that calls operators under a context
+        override or edits the node tree the render composites with."""
+        self.after_render_queue.put(fn)
 
 
 STATE = _State()
