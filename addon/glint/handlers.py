@@ -29,6 +29,8 @@ import queue
 import threading
 import time
 import traceback
+from dataclasses import dataclass
+from typing import Optional, Tuple
 
 import bpy
 from bpy.app.handlers import persistent
@@ -37,7 +39,29 @@ from . import compositor, frame, host, native
 from .host import engines
 from .state import STATE, FrameReport, log
 
-_job = {"scene": None, "target": None, "done": False, "skip": None, "ui_notice": None}
+
+
+@dataclass
+class RenderJob:
+    """What one render (an F12, a ``-f``, a whole ``-a``) carries from handler to
+    handler: made at ``render_init`` for a scene with Glint on, dropped when the
+    render completes or is cancelled. Nothing of it outlives its render."""
+    scene: str
+    # (frame, subframe) that render_pre announced: the one evaluation traced
+    target: Optional[Tuple[int, float]] = None
+    done: bool = False  # that frame was traced (motion blur evaluates it again)
+    skip: Optional[str] = None  # why this render gets no reflections at all
+    ui_notice: Optional[str] = None  # the last report queued, so -a shows it once
+
+
+# The render in progress; handlers get only the scene, so they find it here.
+_render: Optional[RenderJob] = None
+
+
+def _job_of(scene) -> Optional[RenderJob]:
+    """The running render's job when it is ``scene``'s and Glint is still on."""
+    job = _render
+    return job if job is not None and job.scene == scene.name and _enabled(scene) else None
 
 # The core already named in the log (once per session, and again if it changes).
 _announced = {"core": None, "host": False}
@@ -72,10 +96,11 @@ def _repair_setup(scene_name: str) -> None:
 
 @persistent
 def on_render_init(scene, *args):
-    _job.update(scene=None, target=None, done=False, skip=None)
+    global _render
+    _render = None
     if not _enabled(scene):
         return
-    _job["scene"] = scene.name
+    job = _render = RenderJob(scene.name)
     STATE.cancel.clear()
     if not _announced["host"]:
         _announced["host"] = True
@@ -94,11 +119,11 @@ def on_render_init(scene, *args):
         # may be drawing or evaluating the same trees: the main thread does it.
         # After the job, too: the render composites with this very tree.
         STATE.after_render(lambda name=scene.name: _repair_setup(name))
-        _skip(scene, f"the compositor set-up was changed ({exc}); Glint restores it now, render again")
+        _skip(job, scene, f"the compositor set-up was changed ({exc}); Glint restores it now, render again")
         return
     except Exception as exc:  # never let a node-tree problem stop the render
         traceback.print_exc()
-        _skip(scene, f"could not set up the compositor ({type(exc).__name__}: {exc})")
+        _skip(job, scene, f"could not set up the compositor ({type(exc).__name__}: {exc})")
         return
     if turned_on:  # an old file's compositor was off: say what changed, render with reflections
         log(f"scene {scene.name!r}: {turned_on}")
@@ -115,20 +140,21 @@ def _region_text(report) -> str:
     return f"{x1 - x0}x{y1 - y0} ({share:.0%} of the frame)"
 
 
-def _skip(scene, reason: str) -> None:
+def _skip(job: RenderJob, scene, reason: str) -> None:
     """This render gets no reflections, for ``reason``: say so everywhere."""
-    _job["skip"] = reason
+    job.skip = reason
     log(f"this render gets no reflections: {reason}")
     STATE.last = FrameReport(frame=scene.frame_current, status="error", message=reason)
-    _notify_ui(reason)
+    _notify_ui(job, reason)
 
 
 @persistent
 def on_render_pre(scene, *args):
-    if _job["scene"] != scene.name or not _enabled(scene):
+    job = _job_of(scene)
+    if job is None:
         return
-    _job["target"] = (scene.frame_current, round(scene.frame_subframe, 6))
-    _job["done"] = False
+    job.target = (scene.frame_current, round(scene.frame_subframe, 6))
+    job.done = False
     try:
         # A frame Glint does not handle passes through. Only debug views and the
         # layers EXR show more than the UV image lets through: then every image is zeroed.
@@ -141,16 +167,17 @@ def on_render_pre(scene, *args):
 
 @persistent
 def on_frame_change_post(scene, depsgraph=None, *args):
-    if depsgraph is None or depsgraph.mode != "RENDER" or _job["done"]:
+    if depsgraph is None or depsgraph.mode != "RENDER":
         return
-    if _job["scene"] != scene.name or _job["target"] is None or not _enabled(scene) or _job["skip"]:
+    job = _job_of(scene)
+    if job is None or job.done or job.target is None or job.skip:
         return
     ev = depsgraph.scene_eval
-    if (ev.frame_current, round(ev.frame_subframe, 6)) != _job["target"]:
+    if (ev.frame_current, round(ev.frame_subframe, 6)) != job.target:
         return  # a motion-blur sub-frame
     if depsgraph.view_layer.name != compositor.target_view_layer(scene).name:
         return
-    _job["done"] = True
+    job.done = True
     STATE.busy, STATE.progress = True, ""
     STATE.touch()
     try:
@@ -173,16 +200,16 @@ def on_frame_change_post(scene, depsgraph=None, *args):
     else:
         log(f"frame {report.frame}: rendered WITHOUT reflections: {report.message}")
         # A cancel the user asked for is reported, not shown as an error pop-up.
-        _notify_ui(report.message, level="WARNING" if report.status == "cancelled" else "ERROR")
+        _notify_ui(job, report.message, level="WARNING" if report.status == "cancelled" else "ERROR")
 
 
-def _notify_ui(message: str, level: str = "ERROR") -> None:
+def _notify_ui(job: RenderJob, message: str, level: str = "ERROR") -> None:
     """In the UI, report a frame without reflections from the main thread: the
     status bar and the Info log, and for errors Blender's report pop-up over the
     render window."""
-    if bpy.app.background or _job.get("ui_notice") == message:
+    if bpy.app.background or job.ui_notice == message:
         return
-    _job["ui_notice"] = message
+    job.ui_notice = message
     # After the job: the report is an operator called under a context override,
     # which Blender 3.4.1 looks up without the GIL when another thread holds it;
     # a render thread in any add-on's handler at that moment crashes Blender.
@@ -258,8 +285,9 @@ def _main_thread_tick():
 
 @persistent
 def on_render_end(scene, *args):
-    if _job["scene"] == scene.name:
-        _job.update(scene=None, target=None, done=False, skip=None, ui_notice=None)
+    global _render
+    if _render is not None and _render.scene == scene.name:
+        _render = None
         STATE.touch()
 
 
