@@ -58,12 +58,18 @@ def check_pipeline(out, gb):
     assert set(out["stats"]["skipped"]) <= set(glint_core.STAGES)
 
 
+# The marches as the extremes run them: each screen march with one ray a pixel,
+# and hiz with antialiased outlines too, as the presets that most users render
+# with trace (docs/marches.md, *Antialiased outlines*).
+MARCH_RUNS = [dict(march=m) for m in SCREEN_MARCHES] + [dict(march="hiz", antialias=4)]
+
+
 def run_all(gb, **params):
-    """Both marches and the pipeline on one G-buffer, each under the guard."""
+    """Every march run and the pipeline on one G-buffer, each under the guard."""
     kw = dict(BASE, **params)
-    for march in SCREEN_MARCHES:
+    for run in MARCH_RUNS:
         uv = guarded(glint_core.trace, gb["position"], gb["normal"], gb["projection"],
-                     march=march, **kw)
+                     **run, **kw)
         check_uv(uv, gb["position"].shape)
         # Unseen pixels report exactly nothing.
         unseen = ~(gb["position"][..., 3] > 0)
@@ -75,6 +81,18 @@ def run_all(gb, **params):
 
 
 _scene_cache = {}
+
+
+@pytest.mark.parametrize("kind", ["persp", "ortho"])
+def test_the_extremes_reach_the_antialiased_outlines(kind):
+    """MARCH_RUNS' antialiased hiz is only a test of that code if the scenes the
+    extremes start from have outline pixels: there it must change some pixels."""
+    gb = scene(kind)
+    args = (gb["position"], gb["normal"], gb["projection"])
+    one = glint_core.trace(*args, march="hiz", **BASE)
+    aa = glint_core.trace(*args, march="hiz", antialias=4, **BASE)
+    changed = (one != aa).any(axis=-1).sum()
+    assert changed >= 50, changed
 
 
 def scene(kind="persp", w=64, h=48, **cam):
@@ -280,11 +298,11 @@ def _poisoned():
 def test_non_finite_and_zero_values_in_the_buffers():
     gb, picks = _poisoned()
     out = run_all(gb)
-    for march in SCREEN_MARCHES:
-        uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march=march)
+    for run in MARCH_RUNS:
+        uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], **run)
         # Those pixels themselves read as nothing seen / no normal: (0, 0, 0, 0).
         for idx in picks:
-            assert np.all(uv.reshape(-1, 4)[idx] == 0), march
+            assert np.all(uv.reshape(-1, 4)[idx] == 0), run
     assert (out["uv"][..., 2] > 0).sum() > 100  # the rest still reflects
 
 
@@ -301,9 +319,9 @@ def test_single_pixel_exact_values():
     pos = np.array([[[0.0, 0.0, -3.0, 1.0]]], np.float32)
     nrm = np.array([[[0.0, 0.6, 0.8]]], np.float32)
     proj = A.projection_matrix("persp", 1, 1)
-    for march in SCREEN_MARCHES:
-        uv = glint_core.trace(pos, nrm, proj, march=march, resolution=1.0)
+    for run in MARCH_RUNS:
+        uv = glint_core.trace(pos, nrm, proj, resolution=1.0, **run)
         assert uv[0, 0, 2] == 0
         pos[0, 0, 3] = 0.0
-        assert np.all(glint_core.trace(pos, nrm, proj, march=march) == 0)
+        assert np.all(glint_core.trace(pos, nrm, proj, **run) == 0)
         pos[0, 0, 3] = 1.0
