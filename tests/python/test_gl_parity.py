@@ -253,7 +253,8 @@ def analytic_back_layer(name, w, h):
 @pytest.mark.parametrize("occluder", [False, True], ids=["plain", "back-occluder"])
 @pytest.mark.parametrize("resolution", [1.0, 0.3], ids=["every-ray", "reused-rays"])
 @pytest.mark.parametrize("antialias", [1, 4])
-@pytest.mark.parametrize("name,w,h,gated,least", [("persp", 160, 90, False, 50), ("ortho", 128, 96, True, 10),
+@pytest.mark.parametrize("name,w,h,gated,least", [("persp", 160, 90, False, 50), ("persp", 161, 91, False, 50),
+                                                  ("ortho", 128, 96, True, 10),
                                                   ("ortho-rough", 128, 96, True, 0)])
 def test_hiz_antialias_matches_cpu(gl, name, w, h, gated, least, antialias, resolution, occluder, artifacts):
     """The outline pixels' extra rays (march_hiz.cpp and cpu/outline.cpp, *Antialiased outlines*)
