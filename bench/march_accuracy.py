@@ -9,7 +9,17 @@ visible hit, recall the share of exact visible hits reported within 1.5 px.
 Times are medians of --repeat runs, each backend and march in the same process, the
 repeats of all marches of a scene taken in turn so that the machine's load falls on all alike.
 
+--coverage also scores each pixel's visibility against the exact coverage of its
+reflection: the share of a 4x4 grid of sub-pixel rays (a float64 render at four
+times the size) whose mirror hit is visible. That is the answer an antialiased
+frame shows, and what the `antialias` option approximates on outlines: "coverage
+err" is the mean |visibility - coverage| over the pixels whose 16 rays all start on
+the pixel's own reflector, "partial err" the same over those of them whose coverage
+is strictly between 0 and 1 (the outlines). Pixels within the screen-edge fade of
+any row's report are left out, since the fade is not coverage.
+
   /usr/bin/python3 bench/march_accuracy.py --sizes 640x480,1920x1080 --repeat 3
+  /usr/bin/python3 bench/march_accuracy.py --sizes 960x540 --coverage
 """
 from __future__ import annotations
 
@@ -27,6 +37,7 @@ sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(H
 
 import analytic as A  # noqa: E402
 import glint_core  # noqa: E402
+from reference_hiz import EDGE_FADE  # noqa: E402  (the fade at the screen's edges)
 
 MAX_DISTANCE = 15.0
 SCENES = {
@@ -61,6 +72,41 @@ def scene_data(name, w, h, cache_dir):
     return d
 
 
+COVERAGE_GRID = 4  # sub-pixel rays per side
+
+
+def coverage_data(name, w, h, cache_dir):
+    """The exact coverage of each pixel's reflection, and where it is defined (the
+    pixel's 16 sub-pixel rays all start on its own reflector); cached like scene_data."""
+    path = os.path.join(cache_dir, f"{name}_{w}x{h}_coverage{COVERAGE_GRID}.npz") if cache_dir else None
+    if path and os.path.exists(path):
+        return dict(np.load(path))
+    sc = SCENES[name]()
+    gb = A.render(sc, w, h)
+    coverage, whole = A.reflection_coverage(sc, gb, MAX_DISTANCE, COVERAGE_GRID)
+    d = dict(coverage=coverage, defined=whole & (gb["specular"][..., :3].mean(-1) > 0))
+    if path:
+        os.makedirs(cache_dir, exist_ok=True)
+        np.savez(path, **d)
+    return d
+
+
+def coverage_errors(uvs, cov):
+    """(coverage err, partial err) of each reflected-uv buffer, over the pixels every
+    buffer leaves out of its screen-edge fade."""
+    mask = cov["defined"].copy()
+    for uv in uvs:
+        u, v = uv[..., 0], uv[..., 1]
+        fade = np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
+        mask &= (fade == 1) | (uv[..., 2] == 0)
+    partial = mask & (cov["coverage"] > 0) & (cov["coverage"] < 1)
+    out = []
+    for uv in uvs:
+        err = np.abs(uv[..., 2] - cov["coverage"])
+        out.append((err[mask].mean(), err[partial].mean() if partial.any() else float("nan")))
+    return out
+
+
 def timed_round_robin(fns, repeat):
     """[(median ms, last output)] of each fn, the repeats taken in turn (a, b, c, a, b, c, ...)
     so that a change in the machine's load while measuring falls on all of them alike."""
@@ -83,6 +129,8 @@ def main():
                     help="where exact G-buffers are kept between runs ('' for none)")
     ap.add_argument("--only", default="",
                     help="comma-separated rows to run (e.g. 'seed (defaults),balanced'); '' for all")
+    ap.add_argument("--coverage", action="store_true",
+                    help="also score visibility against the exact 4x4 coverage (module docstring)")
     ap.add_argument("--cost", action="store_true",
                     help="instead: time of the seed and the balanced preset against max_distance "
                          "and image size on the floor scene")
@@ -92,14 +140,19 @@ def main():
     runs = [("seed (defaults)", dict(march="seed"), False)]
     for name, kw in glint_core.presets().items():
         if kw["march"] in glint_core.marches() and not glint_core.march_details()[kw["march"]]["needs_mesh"]:
-            runs.append((name, kw, False))
-            if glint_core.march_details()[kw["march"]]["uses_back_position"]:
-                runs.append((name + " + back layer", kw, True))
+            variants = [(name, kw)]
+            if args.coverage and kw.get("antialias", 0) > 0:  # the knob's effect, in the same run
+                variants.append((f"{name}, antialias 0", dict(kw, antialias=0)))
+            for label, vkw in variants:
+                runs.append((label, vkw, False))
+                if glint_core.march_details()[kw["march"]]["uses_back_position"]:
+                    runs.append((label + " + back layer", vkw, True))
     if args.only:
         keep = set(args.only.split(","))
         runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep]  # the seed's row is the ratios' base
-    print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |")
-    print("|---|---|---|---|---|---|---|---|")
+    extra = " coverage err | partial err |" if args.coverage else ""
+    print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |" + extra)
+    print("|---|---|---|---|---|---|---|---|" + ("---|---|" if args.coverage else ""))
     for size in args.sizes.split(","):
         w, h = (int(v) for v in size.split("x"))
         for scene in args.scenes.split(","):
@@ -110,10 +163,13 @@ def main():
                     **(dict(back_position=d["back"]) if back else {})) for _, kw, back in runs]
                 results = timed_round_robin(calls, args.repeat)
                 seed_ms = results[0][0]
-                for (label, _, _), (ms, uv) in zip(runs, results):
+                cov = coverage_errors([uv for _, uv in results], coverage_data(scene, w, h, args.cache)) \
+                    if args.coverage else [None] * len(results)
+                for (label, _, _), (ms, uv), ce in zip(runs, results, cov):
                     p, r = score(uv, d["exact_uv"], d["visible"])
+                    tail = f" {ce[0]:.4f} | {ce[1]:.3f} |" if ce else ""
                     print(f"| {scene} | {w}x{h} | {backend} | {label} | {ms:.0f} | {ms / seed_ms:.2f} | "
-                          f"{p:.4f} | {r:.4f} |", flush=True)
+                          f"{p:.4f} | {r:.4f} |{tail}", flush=True)
 
 
 def cost_table(args):

@@ -549,6 +549,20 @@ def mirror_floor_scene(kind: str = "persp", shift=(0.0, 0.0), sphere=True, box=T
     return Scene(objs, cam)
 
 
+def reflection_coverage(scene: Scene, gbuf: dict, max_distance: float, grid: int = 4):
+    """The exact coverage of each pixel's reflection, what an antialiased frame shows:
+    the share of a grid x grid lattice of sub-pixel rays (a render at ``grid`` times
+    ``gbuf``'s size) whose mirror hit is visible. Returns (coverage, whole): ``whole``
+    marks the pixels whose sub-pixel rays all start on the pixel's own object, where
+    the coverage is the reflection's alone and not the reflector's own outline."""
+    h, w = gbuf["object"].shape
+    hi = render(scene, w * grid, h * grid)
+    visible = mirror_hits(scene, hi, max_distance, incident="view")["visible"]
+    coverage = visible.reshape(h, grid, w, grid).mean(axis=(1, 3))
+    whole = (hi["object"].reshape(h, grid, w, grid) == gbuf["object"][:, None, :, None]).all(axis=(1, 3))
+    return coverage, whole
+
+
 def back_layer(scene: Scene, gbuf: dict) -> np.ndarray:
     """The nearest back-facing surface behind each pixel's own, float32 [H, W, 4]
     (view xyz, w = 1 where there is one): what a rasterizer's back-face layer

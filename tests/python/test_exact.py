@@ -158,12 +158,9 @@ def test_antialiased_outlines_follow_the_coverage(glint, name, make):
     that hit: against the exact coverage (16 sub-pixel rays, float64 render) the summed
     |visibility - coverage| over the reflecting pixels falls by more than half (89 -> 27
     on the floor, 60 -> 30 on the corridor; docs/marches.md, *Antialiased outlines*)."""
-    scene, s = make(), 4
+    scene = make()
     gbuf = analytic.render(scene, W, H)
-    hi = analytic.render(scene, W * s, H * s)
-    hits = analytic.mirror_hits(scene, hi, 15.0, incident="view")
-    whole = (hi["object"].reshape(H, s, W, s) == gbuf["object"][:, None, :, None]).all(axis=(1, 3))
-    coverage = hits["visible"].reshape(H, s, W, s).mean(axis=(1, 3))
+    coverage, whole = analytic.reflection_coverage(scene, gbuf, 15.0)
     inside = whole & (gbuf["specular"][..., :3].mean(-1) > 0)
     err = {}
     for aa in (0, 4):

@@ -389,13 +389,8 @@ def test_antialiased_outlines_follow_the_coverage(name, resolution):
     and as much on the pixels whose coverage is partial (by 27-40%) (docs/marches.md,
     *Antialiased outlines*)."""
     sc = SCENES[name]()
-    w, h, s = 160, 120, 4
-    gb, _, back = data(name, w, h)
-    hi = A.render(sc, w * s, h * s)
-    mh = A.mirror_hits(sc, hi, 15.0, incident="view")
-    # Pixels whose 16 samples all see the pixel's own object: the reflector's coverage is whole.
-    whole = (hi["object"].reshape(h, s, w, s) == gb["object"][:, None, :, None]).all(axis=(1, 3))
-    coverage = mh["visible"].reshape(h, s, w, s).mean(axis=(1, 3))
+    gb, _, back = data(name, 160, 120)
+    coverage, whole = A.reflection_coverage(sc, gb, 15.0)
     reflective = gb["specular"][..., :3].mean(-1) > 0
     vis, inside = {}, whole & reflective
     for aa in (0, 4):
