@@ -131,6 +131,9 @@ def main():
                     help="comma-separated rows to run (e.g. 'seed (defaults),balanced'); '' for all")
     ap.add_argument("--coverage", action="store_true",
                     help="also score visibility against the exact 4x4 coverage (module docstring)")
+    ap.add_argument("--antialias-levels", default="0",
+                    help="with --coverage: the other antialias levels an antialiasing preset is also "
+                         "run at, comma-separated (e.g. 0,1,2,3)")
     ap.add_argument("--cost", action="store_true",
                     help="instead: time of the seed and the balanced preset against max_distance "
                          "and image size on the floor scene")
@@ -142,14 +145,17 @@ def main():
         if kw["march"] in glint_core.marches() and not glint_core.march_details()[kw["march"]]["needs_mesh"]:
             variants = [(name, kw)]
             if args.coverage and kw.get("antialias", 0) > 0:  # the knob's effect, in the same run
-                variants.append((f"{name}, antialias 0", dict(kw, antialias=0)))
+                variants += [(f"{name}, antialias {a}", dict(kw, antialias=a))
+                             for a in (int(v) for v in args.antialias_levels.split(",")) if a != kw["antialias"]]
             for label, vkw in variants:
                 runs.append((label, vkw, False))
                 if glint_core.march_details()[kw["march"]]["uses_back_position"]:
                     runs.append((label + " + back layer", vkw, True))
     if args.only:
         keep = set(args.only.split(","))
-        runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep]  # the seed's row is the ratios' base
+        # A preset named keeps its variants (", antialias N", " + back layer"); the
+        # seed's row is the ratios' base.
+        runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep or r[0].split(",")[0].split(" + ")[0] in keep]
     extra = " coverage err | partial err |" if args.coverage else ""
     print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |" + extra)
     print("|---|---|---|---|---|---|---|---|" + ("---|---|" if args.coverage else ""))
