@@ -72,6 +72,8 @@ def run_ui(setup, blend, out, config, timeout=150):
         res = json.load(f)
     assert not res["errors"], res["errors"]
     assert "Traceback" not in log, log[-4000:]
+    # Every report Glint showed waited for the render job to end.
+    assert not any(r["job_running"] for r in res["reports_shown"]), res["reports_shown"]
     return res, log
 
 
@@ -233,3 +235,4 @@ def test_cancel_glint_stops_a_long_export_during_f12(xvfb, blender, samples, tmp
     assert "Glint: frame 1: rendered WITHOUT reflections: Glint export cancelled at" in log
     assert any(line.startswith("Glint: rendered without reflections: Glint export cancelled")
                for line in res["info_reports"]), res["info_reports"]
+    assert [r["level"] for r in res["reports_shown"]] == ["WARNING"], res["reports_shown"]

@@ -46,7 +46,23 @@ exec(cfg.get("python", ""))
 
 T0 = time.monotonic()
 RENDERS = cfg.get("renders", [{}])
-result = {"renders": [], "errors": [], "objects": {}}
+result = {"renders": [], "errors": [], "objects": {}, "reports_shown": []}
+
+
+def _record_reports():
+    """Glint's reports, as shown, with whether a render job was still running:
+    one shown mid-render can crash Blender (docs/addon.md, *Reports from a render*)."""
+    from glint import handlers
+    show = handlers._show_report
+
+    def recorded(message, level):
+        result["reports_shown"].append(dict(message=message, level=level,
+                                            job_running=bpy.app.is_job_running("RENDER")))
+        return show(message, level)
+    handlers._show_report = recorded
+
+
+_record_reports()
 for name in cfg.get("mirror_objects", []):
     ob = bpy.data.objects[name]
     pts = [ob.matrix_world @ v.co for v in ob.data.vertices]
