@@ -36,6 +36,13 @@ ENTERED_HIDDEN = _S.ENTERED_HIDDEN  # an occluder's hit channel when the ray cam
 HIDDEN_SHARE = _S.HIDDEN_SHARE  # deeper than this share of the thickness: came in from behind
 
 
+def edge_fade(uv: np.ndarray) -> np.ndarray:
+    """hiz's visibility fade at the screen's edges, per pixel of a reflected-uv
+    buffer [H, W, 4]: 1 inside, falling linearly to 0 within EDGE_FADE of an edge."""
+    u, v = uv[..., 0], uv[..., 1]
+    return np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
+
+
 def _seen(p):
     return p[3] > 0 and all(math.isfinite(v) for v in p)
 

@@ -153,7 +153,7 @@ def test_the_back_layer_places_an_outline(name):
     uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back,
                           **dict(glint_core.presets()["balanced"], resolution=1.0, antialias=0))
     u, v = uv[..., 0], uv[..., 1]
-    fade = np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
+    fade = edge_fade(uv)
     rep = (uv[..., 2] > 0) & (fade == 1)
     err = np.hypot((u - mh["uv"][..., 0]) * w, (v - mh["uv"][..., 1]) * h)
     good = rep & mh["visible"] & (err <= 1.5)
@@ -186,7 +186,7 @@ def test_an_entered_occluder_is_a_hidden_hit():
         assert late[front].mean() >= 0.3
 
 
-from reference_hiz import EDGE_FADE  # noqa: E402  (docs/marches.md: the fade at the screen's edges)
+from reference_hiz import edge_fade  # noqa: E402  (docs/marches.md: the fade at the screen's edges)
 
 
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
@@ -204,7 +204,7 @@ def test_visibility_is_confidence_times_the_edge_fade(name):
     rep = uv[..., 2] > 0
     assert np.array_equal(uv[..., 2], uv[..., 3])
     u, v = uv[..., 0], uv[..., 1]
-    fade = np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
+    fade = edge_fade(uv)
     conf = np.where(rep, uv[..., 2] / np.maximum(fade, 1e-9), 0)
     sure = rep & (fade > 0.05)
     assert np.all((conf[sure] > 0.5 - 1e-4) & (conf[sure] < 1 + 1e-4))
@@ -397,9 +397,7 @@ def test_antialiased_outlines_follow_the_coverage(name, resolution):
         uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back,
                               specular=gb["specular"],
                               **dict(glint_core.presets()["balanced"], resolution=resolution, antialias=aa))
-        u, v = uv[..., 0], uv[..., 1]
-        fade = np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
-        inside &= (fade == 1) | (uv[..., 2] == 0)  # the screen-edge fade is not coverage
+        inside &= (edge_fade(uv) == 1) | (uv[..., 2] == 0)  # the screen-edge fade is not coverage
         vis[aa] = uv[..., 2]
     partial = inside & (coverage > 0) & (coverage < 1)
     err = {aa: np.abs(vis[aa] - coverage) for aa in vis}
