@@ -37,7 +37,7 @@ sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(H
 
 import analytic as A  # noqa: E402
 import glint_core  # noqa: E402
-from reference_hiz import EDGE_FADE  # noqa: E402  (the fade at the screen's edges)
+from reference_hiz import edge_fade  # noqa: E402  (the fade at the screen's edges)
 
 MAX_DISTANCE = 15.0
 SCENES = {
@@ -96,9 +96,7 @@ def coverage_errors(uvs, cov):
     buffer leaves out of its screen-edge fade."""
     mask = cov["defined"].copy()
     for uv in uvs:
-        u, v = uv[..., 0], uv[..., 1]
-        fade = np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
-        mask &= (fade == 1) | (uv[..., 2] == 0)
+        mask &= (edge_fade(uv) == 1) | (uv[..., 2] == 0)
     partial = mask & (cov["coverage"] > 0) & (cov["coverage"] < 1)
     out = []
     for uv in uvs:
@@ -140,7 +138,7 @@ def main():
     args = ap.parse_args()
     if args.cost:
         return cost_table(args)
-    runs = [("seed (defaults)", dict(march="seed"), False)]
+    runs = [("seed (defaults)", dict(march="seed"), False, "seed (defaults)")]  # (label, kw, back, preset)
     for name, kw in glint_core.presets().items():
         if kw["march"] in glint_core.marches() and not glint_core.march_details()[kw["march"]]["needs_mesh"]:
             variants = [(name, kw)]
@@ -148,14 +146,14 @@ def main():
                 variants += [(f"{name}, antialias {a}", dict(kw, antialias=a))
                              for a in (int(v) for v in args.antialias_levels.split(",")) if a != kw["antialias"]]
             for label, vkw in variants:
-                runs.append((label, vkw, False))
+                runs.append((label, vkw, False, name))
                 if glint_core.march_details()[kw["march"]]["uses_back_position"]:
-                    runs.append((label + " + back layer", vkw, True))
+                    runs.append((label + " + back layer", vkw, True, name))
     if args.only:
         keep = set(args.only.split(","))
         # A preset named keeps its variants (", antialias N", " + back layer"); the
         # seed's row is the ratios' base.
-        runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep or r[0].split(",")[0].split(" + ")[0] in keep]
+        runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep or r[3] in keep]
     extra = " coverage err | partial err |" if args.coverage else ""
     print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |" + extra)
     print("|---|---|---|---|---|---|---|---|" + ("---|---|" if args.coverage else ""))
@@ -166,12 +164,12 @@ def main():
             for backend in args.backends.split(","):
                 calls = [lambda kw=kw, back=back: glint_core.trace(
                     d["position"], d["normal"], d["projection"], backend=backend, **kw,
-                    **(dict(back_position=d["back"]) if back else {})) for _, kw, back in runs]
+                    **(dict(back_position=d["back"]) if back else {})) for _, kw, back, _ in runs]
                 results = timed_round_robin(calls, args.repeat)
                 seed_ms = results[0][0]
                 cov = coverage_errors([uv for _, uv in results], coverage_data(scene, w, h, args.cache)) \
                     if args.coverage else [None] * len(results)
-                for (label, _, _), (ms, uv), ce in zip(runs, results, cov):
+                for (label, _, _, _), (ms, uv), ce in zip(runs, results, cov):
                     p, r = score(uv, d["exact_uv"], d["visible"])
                     tail = f" {ce[0]:.4f} | {ce[1]:.3f} |" if ce else ""
                     print(f"| {scene} | {w}x{h} | {backend} | {label} | {ms:.0f} | {ms / seed_ms:.2f} | "

@@ -40,7 +40,6 @@ from .host import engines
 from .state import STATE, FrameReport, log
 
 
-
 @dataclass
 class RenderJob:
     """What one render (an F12, a ``-f``, a whole ``-a``) carries from handler to
