@@ -319,8 +319,8 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     da = behind_by(ta)
     if da <= slack:
         return "hit on plane", ta
-    if da <= thick:  # inside: came in by the side it is nearer to
-        return ("entered" if da > HIDDEN_SHARE * thick else "blocked"), ta
+    if da <= thick:  # inside: came in by the side it is nearer to, from the texel's own depth
+        return ("entered" if depth(ta) + p[2] > HIDDEN_SHARE * thick else "blocked"), ta
     if b_behind and behind_by(tb) <= thick:
         return "entered", tb
     return "pass", ta
@@ -329,9 +329,16 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
 # The reuse of rays at resolution <= 0.5 (docs/marches.md, "Reusing neighbours'
 # rays"), written from that description: pixels with both coordinates even keep
 # their own ray's result; any other pixel takes its traced neighbours' common
-# miss, or the mean of their hits when those lie within 3 pixels of each other,
+# miss, or the mean of their hits when those lie within 3 pixels of each other
+# and are of one kind (hits, occluders, hidden sides),
 # provided that all of them lie on its own smooth surface; else its own ray's.
 REUSE_COS, REUSE_DEPTH, REUSE_PIXELS = _S.REUSE_COS, _S.REUSE_DEPTH, _S.REUSE_PIXELS
+
+
+def _kind(r):
+    """A hit (1), an occluder found late (0), a hidden side entered (-1): neighbours
+    of different kinds are not merged."""
+    return 1 if r[3] > 0 else (0 if r[3] == 0 else -1)
 
 
 def reuse_rays(position, normal, full):
@@ -369,7 +376,7 @@ def reuse_rays(position, normal, full):
             hits = [g for g in got if g[2] > 0]
             if not hits:
                 out[y, x] = 0.0
-            elif len(hits) == len(got) and all(
+            elif len(hits) == len(got) and len({_kind(g) for g in got}) == 1 and all(
                     math.hypot((a[0] - b[0]) * w, (a[1] - b[1]) * h) <= REUSE_PIXELS for a in got for b in got):
                 out[y, x] = (np.mean([g[0] for g in got]), np.mean([g[1] for g in got]),
                              min(g[2] for g in got), min(g[3] for g in got))

@@ -77,7 +77,8 @@ constexpr float kUncertain = 0.5f;
 // (docs/marches.md, *Blocked rays*).
 constexpr float kEnteredHidden = -1.0f;
 // An occluder's report is a hidden entry when, inside the texel's thickness,
-// the ray lies deeper behind the front than this share of the thickness.
+// the ray lies deeper behind the texel's own depth (flat, not along its
+// plane) than this share of the thickness.
 constexpr float kHiddenShare = 0.5f;
 // A texel's footprint range is clamped to its centre +- this share of its
 // view distance (plus its thickness): a plane seen edge-on would otherwise

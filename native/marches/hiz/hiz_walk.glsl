@@ -186,7 +186,9 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
     return HIT;
   }
   precise float share = HIDDEN_SHARE * thick;
-  if (da <= thick) return da > share ? ENTERED : BLOCKED;
+  // The side it came in by, from the texel's own depth (march_hiz.cpp says why).
+  precise float dc = ray_depth(ta) + p.z;
+  if (da <= thick) return dc > share ? ENTERED : BLOCKED;
   if (b_behind) {
     precise float sxb = (g_f0.x + tb * g_d.x) * sxs - 1.0;
     precise float syb = (g_f0.y + tb * g_d.y) * sys - 1.0;

@@ -269,10 +269,15 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
     located = true;  // on the plane, to the rounding slack
     return TexelOutcome::Hit;
   }
-  // Which side the ray came in by: the one it is nearer to. A crossing of the
-  // front found late lies just behind it; a ray that passed behind the
-  // object the texel before and is inside now came in by the back.
-  if (da <= thick) return da > kHiddenShare * thick ? TexelOutcome::Entered : TexelOutcome::Blocked;
+  // Which side the ray came in by: the one it is nearer to, measured from the
+  // texel's own depth, not along its plane. A crossing of the front found late
+  // lies just behind it; a ray that passed behind the object the texel before
+  // and is inside now came in by the back. Flat, because near an outline the
+  // plane runs in front of a rounded object (the surface curves away from it),
+  // while the middle of the front and back depths is where the two sides meet
+  // at the outline (for a sphere, exactly the outline's depth).
+  if (da <= thick)
+    return r.depth(ta) + p[2] > kHiddenShare * thick ? TexelOutcome::Entered : TexelOutcome::Blocked;
   if (b_behind && behind_by(tb) <= thick) return TexelOutcome::Entered;
   return TexelOutcome::Pass;
 }
@@ -494,6 +499,14 @@ namespace {
 // uv with each channel's least visibility (with blocked=occluder an occluder,
 // 0 in the 4th channel, counts as a hit). False also where the pixel itself
 // is not reflective: its own trace writes its 0 then.
+// What a report with visibility > 0 is: a hit (its own visibility in the
+// fourth channel), an occluder found late (0) or a hidden side entered
+// (kEnteredHidden). Neighbours of different kinds straddle an object's edge
+// or the line where its hidden side begins: a pixel between them traces its
+// own ray rather than take a mean uv that is neither, at the least weight of
+// either.
+inline int report_kind(const float* o) { return o[3] > 0.0f ? 1 : (o[3] == 0.0f ? 0 : -1); }
+
 bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
                       float o[4]) {
   if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
@@ -514,9 +527,11 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   }
   if (hits < k) return false;
   const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
+  const int kind = report_kind(out.px(q[0][0], q[0][1]));
   float su = 0.0f, sv = 0.0f, vis = 1.0f, found = 1.0f;
   for (int a = 0; a < k; ++a) {
     const float* ha = out.px(q[a][0], q[a][1]);
+    if (report_kind(ha) != kind) return false;
     for (int b = a + 1; b < k; ++b) {
       const float* hb = out.px(q[b][0], q[b][1]);
       const float du = (ha[0] - hb[0]) * w, dv = (ha[1] - hb[1]) * h;

@@ -66,6 +66,9 @@ bool on_surface(vec4 p, vec3 n, float nn, Traced q) {
   return true;
 }
 
+// A hit (1), an occluder found late (0) or a hidden side entered (-1).
+int report_kind(vec4 r) { return r.w > 0.0 ? 1 : (r.w == 0.0 ? 0 : -1); }
+
 // Two neighbours' hits within REUSE_PIXELS of each other.
 bool close_hits(vec4 ha, vec4 hb) {
   precise float du = (ha.x - hb.x) * u_size.x;
@@ -91,6 +94,10 @@ bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k
   if (k == 4) hits += (q2.r.z > 0.0 ? 1 : 0) + (q3.r.z > 0.0 ? 1 : 0);
   if (hits == 0) return true;
   if (hits < k) return false;
+  // One kind of report (reuse_neighbours() in march_hiz.cpp says why).
+  int kind = report_kind(q0.r);
+  if (report_kind(q1.r) != kind) return false;
+  if (k == 4 && (report_kind(q2.r) != kind || report_kind(q3.r) != kind)) return false;
   if (!close_hits(q0.r, q1.r)) return false;
   if (k == 4 && (!close_hits(q0.r, q2.r) || !close_hits(q0.r, q3.r) || !close_hits(q1.r, q2.r) ||
                  !close_hits(q1.r, q3.r) || !close_hits(q2.r, q3.r)))
