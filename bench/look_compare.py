@@ -28,11 +28,12 @@ a checkout after building:
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
       [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
       [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor,default] \\
-      [--cycles-cache DIR] [--arrays DIR]
+      [--cycles-cache DIR] [--arrays DIR] [--digits 2]
 
 --arrays DIR writes each scene's linear frames, differences, pixel masks and Glint's
 last G-buffer and layers (uv, weight) to DIR/<scene>.npz, for finding where an error
 comes from.
+--digits N prints strength and error with N decimals (3 to tell two changes apart).
 --cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
 scene, size, samples, Blender and the code that makes the frames are the same: Cycles is
 most of a run's time and does not depend on Glint, so comparing Glint's changes needs it
@@ -81,12 +82,13 @@ def _args():
     return kit.script_options(
         {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
          "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
-         "scenes": list(SCENES), "cycles-cache": "", "arrays": ""},
+         "scenes": list(SCENES), "cycles-cache": "", "arrays": "", "digits": 2},
         {"size": _at_least(kit.frame_size, 8, "size"), "cycles-samples": _at_least(int, 2, "cycles-samples"),
          "eevee-samples": _at_least(int, 2, "eevee-samples"), "rounds": _at_least(int, 1, "rounds"),
          "threshold": float, "out": os.path.abspath, "addon": os.path.abspath,
          "scenes": kit.names_among(SCENES, "scenes"),
-         "cycles-cache": os.path.abspath, "arrays": os.path.abspath})
+         "cycles-cache": os.path.abspath, "arrays": os.path.abspath,
+         "digits": _at_least(int, 0, "digits")})
 
 
 _register_addon = kit.register_addon
@@ -498,7 +500,8 @@ def main():
     print("|---|---|---:|---:|---:|---:|---:|")
     for name, method, strength, error, change, false_area, added in all_rows:
         ms = "-" if math.isnan(added) else f"{added:.0f}"
-        print(f"| {name} | {method} | {strength:.2f} | {error:.2f} | {false_area:.3f} | {change:.4f} | {ms} |")
+        k = opts["digits"]
+        print(f"| {name} | {method} | {strength:.{k}f} | {error:.{k}f} | {false_area:.3f} | {change:.4f} | {ms} |")
     print("\n| scene | reflecting pixels | surface pixels | pixels elsewhere | Cycles seed-to-seed error "
           "| Cycles s | Eevee s | Glint stages ms |")
     print("|---|---:|---:|---:|---:|---:|---:|---|")

@@ -214,7 +214,7 @@ def supersampled(v_world, t, mat, cam, exact_scene, w, h, s):
     return box_down(colour, s), box_down(sample(colour, uv), s), box_down(sample(colour, faded), s)
 
 
-def run(size, frames, marches, backend="cpu", supersample=1):
+def run(size, frames, marches, backend="cpu", supersample=1, read_inside=True):
     w, h = size
     v_world, t, mat = scene()
     exact_scene = glint_core.ExactScene(v_world.astype(np.float32), t)
@@ -250,7 +250,11 @@ def run(size, frames, marches, backend="cpu", supersample=1):
             opts = march_options(m)
             uv = glint_core.trace(P, N, proj, specular=S, back_position=B, backend=backend, **opts)
             dims[m] = dimming(uv, floor)
-            cur[m] = (sample(colour, uv), E_faded if opts.get("march") == "hiz" else E_plain)
+            # Glint's look reads the colour inside the objects' outlines
+            # (docs/look-core.md, *Where the colour is read*); the seed's at the uv.
+            read = uv if m.startswith("seed") or not read_inside else glint_core.read_inside_outlines(
+                uv, P, back_position=B, thickness=opts["thickness"])
+            cur[m] = (sample(colour, read), E_faded if opts.get("march") == "hiz" else E_plain)
         for m, (R, E) in cur.items():
             norm = np.abs(E[floor]).sum() + 1e-12
             diff = np.abs(R - E)
@@ -274,6 +278,9 @@ def main():
     ap.add_argument("--frames", type=int, default=24)
     ap.add_argument("--marches", default="seed,draft,balanced,high")
     ap.add_argument("--backend", default="cpu", help="the marches' backend (the exact march runs on the CPU)")
+    ap.add_argument("--read-at-uv", action="store_true",
+                    help="read the frame at the trace's uv everywhere, as before Glint's look read "
+                         "outline texels one texel inside their object")
     ap.add_argument("--supersample", type=int, default=1,
                     help="score against the exact reflection of s x s samples per pixel, box-filtered, "
                          "with the frame antialiased the same way (1: one exact ray per pixel)")
@@ -285,7 +292,7 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|")
     for size in args.sizes.split(","):
         w, h = (int(v) for v in size.split("x"))
-        res = run((w, h), args.frames, marches, args.backend, args.supersample)
+        res = run((w, h), args.frames, marches, args.backend, args.supersample, not args.read_at_uv)
         base = res["exact"]["change"]
         for m in ["exact"] + marches:
             r = res[m]

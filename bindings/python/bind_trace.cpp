@@ -247,6 +247,32 @@ void bind_trace(pyb::module_& m) {
       "the mean uv of their hit (or earlier-ring) 3x3 neighbours; vis and the 4th channel unchanged.\n"
       "What composite_layers() does to its uv image.");
   m.def(
+      "read_inside_outlines",
+      [](const pyb::handle& uv, const pyb::handle& position, const pyb::handle& back_position, float thickness,
+         int threads) {
+        Image u = image_from_array(uv, "uv", 0.0f, 4);
+        const Image p = image_from_array(position, "position", 1.0f, 4);
+        require_same_size(u, "uv", p, "position");
+        Image b;
+        if (!back_position.is_none()) {
+          b = image_from_array(back_position, "back_position", 0.0f, 4);
+          require_same_size(b, "back_position", p, "position");
+        }
+        if (!(thickness >= 0.0f))
+          throw InvalidArgument("thickness", "expected a number >= 0, got " + std::to_string(thickness));
+        {
+          pyb::gil_scoped_release release;
+          read_inside_outlines(u, p, back_position.is_none() ? nullptr : &b, thickness, threads);
+        }
+        return array_from_image(std::move(u));
+      },
+      "uv"_a, "position"_a, pyb::kw_only(), "back_position"_a = pyb::none(), "thickness"_a = TraceOptions{}.thickness,
+      "threads"_a = 0,
+      "A copy of uv where each reported uv (vis > 0) in a texel on an object's outline (a 4-neighbour\n"
+      "unseen or farther than its depth plus its thickness: back_position's, else `thickness`) moves\n"
+      "to the centre of the texel one step inside the object: where Glint's look reads the colour\n"
+      "(composite_layers() and pipeline() with weighting='physical' do this; the seed's look does not).");
+  m.def(
       "continue_lod",
       [](const pyb::handle& weight, const pyb::handle& uv, const pyb::handle& specular,
          const pyb::handle& position) {

@@ -146,6 +146,43 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
     }
 }
 
+void read_inside_outlines(Image& uv, const Image& pos, const Image* back_position, float thickness, int threads) {
+  if (uv.width != pos.width || uv.height != pos.height)
+    throw InvalidArgument("uv", "expected the position's size " + std::to_string(pos.width) + "x" +
+                                    std::to_string(pos.height) + ", got " + std::to_string(uv.width) + "x" +
+                                    std::to_string(uv.height));
+  const int w = pos.width, h = pos.height;
+  auto inside_frame = [&](int x, int y) { return x >= 0 && y >= 0 && x < w && y < h; };
+  parallel_rows(0, h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      float* t = uv.px(x, y);
+      if (!(t[2] > 0.0f) || !std::isfinite(t[0]) || !std::isfinite(t[1])) continue;
+      const int i = static_cast<int>(std::floor(t[0] * static_cast<float>(w)));
+      const int j = static_cast<int>(std::floor(t[1] * static_cast<float>(h)));
+      if (!inside_frame(i, j) || !texel_seen(pos.px(i, j))) continue;
+      const float d = -pos.px(i, j)[2];
+      float thick = thickness;
+      if (back_position) {
+        const float* b = back_position->px(i, j);
+        if (texel_seen(b) && -b[2] > d) thick = -b[2] - d;
+      }
+      const float bound = d + thick;  // thick >= 0: a NaN or negative option is refused before
+      auto outside = [&](int qx, int qy) {  // the frame's edge is no outline
+        if (!inside_frame(qx, qy)) return false;
+        const float* o = pos.px(qx, qy);
+        return !texel_seen(o) || -o[2] > bound;
+      };
+      const int si = (outside(i - 1, j) ? 1 : 0) - (outside(i + 1, j) ? 1 : 0);
+      const int sj = (outside(i, j - 1) ? 1 : 0) - (outside(i, j + 1) ? 1 : 0);
+      if (si == 0 && sj == 0) continue;
+      const int qi = i + si, qj = j + sj;
+      if (!inside_frame(qi, qj) || !texel_seen(pos.px(qi, qj)) || outside(qi, qj)) continue;
+      t[0] = (static_cast<float>(qi) + 0.5f) / static_cast<float>(w);
+      t[1] = (static_cast<float>(qj) + 0.5f) / static_cast<float>(h);
+    }
+  });
+}
+
 Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& count, int threads) {
   if (back_albedo.width != traced_uv.width || back_albedo.height != traced_uv.height)
     throw InvalidArgument("back_albedo", "expected the trace's size " + std::to_string(traced_uv.width) + "x" +
@@ -215,6 +252,9 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   });
   out.any_rough = rough.load();
   if (out.any_rough) continue_lod_into_misses(out.weight, out.uv, spec, in.position);
+  // The hidden sides and the lod above came from the trace's own uv; the
+  // colour is read inside the objects' outlines.
+  read_inside_outlines(out.uv, in.position, in.back_position, opt.thickness, threads);
   continue_missing_uv(out.uv, 2, threads);
   // Until here a hidden side counted as a hit: it keeps its lod and its uv.
   // Now its colour leaves the uv's vis for the hidden image, and alpha says

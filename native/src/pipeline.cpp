@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "parallel.h"
+#include "glint/composite.h"
 #include "glint/errors.h"
 #include "glint/memory.h"
 
@@ -125,7 +126,13 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   res.timings.push_back({"trace", ms_since(t0), false});
 
   t0 = Clock::now();
-  Image color = backend.reflection_color(uv, in.color);
+  // Glint's look reads the colour inside the objects' outlines
+  // (read_inside_outlines()); the seed's reads at the uv, as the book does.
+  // The cone's footprint and the uv layer keep the trace's own uv.
+  Image read_at = uv;
+  if (opt.weighting == Weighting::Physical)
+    read_inside_outlines(read_at, in.position, tin.back_position, opt.trace.thickness, opt.threads);
+  Image color = backend.reflection_color(read_at, in.color);
   res.timings.push_back({"reflection_color", ms_since(t0), false});
 
   Image weight;

@@ -156,7 +156,8 @@ def test_layers_are_the_separate_calls_in_one(rough_floor, backend, request):
     kw = dict(glint_core.presets()["balanced"], backend=backend)
     layers = glint_core.composite_layers(gb["position"], gb["normal"], spec, proj, **kw)
     uv = glint_core.trace(gb["position"], gb["normal"], proj, specular=spec, **kw)
-    want_uv = continued_reference(uv, 2)
+    # The colour is read inside outlines, then the misses are continued.
+    want_uv = continued_reference(glint_core.read_inside_outlines(uv, gb["position"], thickness=kw["thickness"]), 2)
     want_uv[..., 3] = want_uv[..., 2]  # no hidden side: the share replaced is vis
     assert np.array_equal(layers["uv"], want_uv)
     weight = glint_core.specular_weight(gb["position"], gb["normal"], spec, proj, backend=backend)
@@ -256,3 +257,71 @@ def test_layers_show_hidden_sides_in_place_of_the_occluder(backend, request):
     assert np.array_equal(layers["uv"][hidden, :2], plain["uv"][hidden, :2])
     assert np.array_equal(layers["weight"], plain["weight"])
     assert "hidden" not in plain
+
+
+def inside_reference(uv, position, back, thickness):
+    """read_inside_outlines() written from its description (glint/composite.h), one
+    pixel at a time in float64."""
+    h, w = position.shape[:2]
+    out = uv.copy()
+    seen = (position[..., 3] > 0) & np.isfinite(position).all(axis=-1)
+    for y, x in zip(*np.nonzero(uv[..., 2] > 0)):
+        # The texel of the uv as the core finds it: the float32 product, floored.
+        i = int(np.floor(np.float32(uv[y, x, 0]) * np.float32(w)))
+        j = int(np.floor(np.float32(uv[y, x, 1]) * np.float32(h)))
+        if not (0 <= i < w and 0 <= j < h) or not seen[j, i]:
+            continue
+        d = -float(position[j, i, 2])
+        t = thickness
+        if back is not None and back[j, i, 3] > 0 and -back[j, i, 2] > d:
+            t = -float(back[j, i, 2]) - d
+
+        def outside(qi, qj):
+            return 0 <= qi < w and 0 <= qj < h and (not seen[qj, qi] or -position[qj, qi, 2] > d + t)
+
+        si = int(outside(i - 1, j)) - int(outside(i + 1, j))
+        sj = int(outside(i, j - 1)) - int(outside(i, j + 1))
+        qi, qj = i + si, j + sj
+        if (si, sj) == (0, 0) or not (0 <= qi < w and 0 <= qj < h) or not seen[qj, qi] or outside(qi, qj):
+            continue
+        out[y, x, :2] = ((qi + 0.5) / w, (qj + 0.5) / h)
+    return out
+
+
+@pytest.mark.parametrize("back", [False, True])
+def test_the_colour_is_read_inside_outlines(back):
+    """A hit or occluder on an object's outline texel is read one texel inside the
+    object, where the frame is the object alone; every other report keeps its uv."""
+    sc = A.mirror_floor_scene()
+    gb = A.render(sc, 160, 120)
+    back_layer = A.back_layer(sc, gb) if back else None
+    uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back_layer,
+                          blocked="occluder", **glint_core.presets()["balanced"])
+    got = glint_core.read_inside_outlines(uv, gb["position"], back_position=back_layer, thickness=0.5)
+    want = inside_reference(uv, gb["position"], back_layer, 0.5)
+    moved = (got != uv).any(axis=-1)
+    assert moved.sum() > 20, "the scene's reflections should meet outlines"
+    assert np.allclose(got, want, atol=1e-7) and np.array_equal(got[..., 2:], uv[..., 2:])
+    # A moved read lands on the object: the texel it reads is no farther than the
+    # outline texel's own depth plus its thickness.
+    h, w = uv.shape[:2]
+    i = (got[moved, 0] * np.float32(w)).astype(int)
+    j = (got[moved, 1] * np.float32(h)).astype(int)
+    i0, j0 = (uv[moved, 0] * np.float32(w)).astype(int), (uv[moved, 1] * np.float32(h)).astype(int)
+    assert (gb["position"][j, i, 3] > 0).all()
+    assert (np.abs(i - i0) <= 1).all() and (np.abs(j - j0) <= 1).all()
+    d0 = -gb["position"][j0, i0, 2]
+    t0 = np.full_like(d0, 0.5)
+    if back:
+        b = back_layer[j0, i0]
+        t0 = np.where((b[:, 3] > 0) & (-b[:, 2] > d0), -b[:, 2] - d0, 0.5)
+    assert (-gb["position"][j, i, 2] <= d0 + t0 + 1e-4).all()
+
+
+def test_read_inside_outlines_refuses_bad_input():
+    gb = A.render(A.mirror_floor_scene(), 16, 12)
+    uv = np.zeros((12, 16, 4), np.float32)
+    with pytest.raises(ValueError, match="uv"):
+        glint_core.read_inside_outlines(uv[:5], gb["position"])
+    with pytest.raises(ValueError, match="thickness"):
+        glint_core.read_inside_outlines(uv, gb["position"], thickness=float("nan"))

@@ -367,16 +367,19 @@ def test_the_pipeline_shows_occluders():
     changed = np.abs(occ["combined"] - miss["combined"]).max(axis=-1) > 0
     assert changed[occluder].mean() > 0.9 and not changed[~occluder].any()
     # the occluder's texel colour, weighted by its visibility: its uv is the texel's
-    # centre, where the stage's bilinear read is that texel alone
+    # centre (on an outline, the centre of the texel inside it, where Glint's look
+    # reads), where the stage's bilinear read is that texel alone
+    read = glint_core.read_inside_outlines(uv, gb["position"], thickness=kw["thickness"])
     h, w = uv.shape[:2]
-    ox = np.clip((uv[..., 0] * w).astype(int), 0, w - 1)
-    oy = np.clip((uv[..., 1] * h).astype(int), 0, h - 1)
+    ox = np.clip((read[..., 0] * w).astype(int), 0, w - 1)
+    oy = np.clip((read[..., 1] * h).astype(int), 0, h - 1)
     want = gb["color"][oy, ox, :3] * uv[..., 2:3]
     got = occ["reflection_color"][..., :3]
     assert np.abs(got - want).max(axis=-1)[occluder].max() < 1e-5
     layers = glint_core.composite_layers(gb["position"], gb["normal"], gb["specular"], gb["projection"],
                                          **kw, blocked="occluder")
-    assert np.array_equal(layers["uv"][..., :3][occluder], uv[..., :3][occluder])
+    assert np.array_equal(layers["uv"][..., :3][occluder], read[..., :3][occluder])
+    assert (read[..., :2] != uv[..., :2]).any(axis=-1)[occluder].sum() > 0
 
 
 

@@ -239,6 +239,24 @@ def test_pipeline_is_its_stages_chained(kind):
                                    box_blur_formula(rc, 3, 1.5), spec), "over"), atol=1e-5)
 
 
+def test_glints_look_reads_the_colour_inside_outlines():
+    """weighting="physical" reads the frame at read_inside_outlines() of the trace's
+    uv; the uv layer stays the trace's own, and the seed's look reads at it."""
+    sc = A.mirror_floor_scene("persp", floor=A.Material(color=(0.4, 0.4, 0.4), specular=(0.8, 0.7, 0.9)))
+    gb = A.render(sc, W, H)
+    kw = dict(glint_core.presets()["balanced"], blocked="occluder")
+    out = run_pipeline(gb, **kw)
+    read = glint_core.read_inside_outlines(out["uv"], gb["position"], thickness=kw["thickness"])
+    moved = (read[..., :2] != out["uv"][..., :2]).any(axis=-1)
+    assert moved.sum() > 5
+    uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], specular=gb["specular"], **kw)
+    np.testing.assert_array_equal(out["uv"], uv)
+    np.testing.assert_allclose(out["reflection_color"], glint_core.reflection_color(read, gb["color"]), atol=1e-7)
+    assert np.abs(out["reflection_color"] - glint_core.reflection_color(uv, gb["color"])).max(axis=-1)[moved].max() > 0
+    seed = run_pipeline(gb, **kw, **SEED_LOOK)
+    np.testing.assert_allclose(seed["reflection_color"], glint_core.reflection_color(uv, gb["color"]), atol=1e-7)
+
+
 def test_no_reflective_pixel_returns_the_base_unchanged():
     sc = A.mirror_floor_scene("persp", floor=A.Material(color=(0.4, 0.4, 0.4)))
     gb = A.render(sc, W, H)

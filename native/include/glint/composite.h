@@ -51,6 +51,22 @@ void continue_missing_uv(Image& uv, int rings, int threads = 0);
 constexpr float kChamferSlack = 1.0824f;
 void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position);
 
+// Where the colour stages read a reflection: every reported uv (vis > 0) that
+// lies in a texel on an object's outline moves to the centre of the texel one
+// step inside the object. The frame blends an outline texel's object with
+// what lies behind it (the engine's antialiasing), while a hit there is on
+// the object: a sphere's rim seen from above, reflected from below, read as
+// rim and floor mixed (grey teeth along the top of its reflection). The
+// reflection's own coverage of an outline is the trace's business
+// (TraceOptions::antialias). Outline: a 4-neighbour unseen or farther than
+// the texel's depth plus its thickness (back_position's, else `thickness`,
+// TraceOptions::thickness); inside: the step away from every such neighbour, taken when
+// the texel there is seen and no farther than that bound (a texel with such
+// neighbours on opposite sides, a line one texel thin, stays). The trace's
+// own uv, which accuracy is scored on, is not changed.
+void read_inside_outlines(Image& uv, const Image& position, const Image* back_position, float thickness,
+                          int threads = 0);
+
 // A ray that blocked="occluder" reports met an object inside its thickness:
 // it entered through the side the camera does not see, the back-face layer's
 // surface at the occluder's texel. Where that texel has a back surface
