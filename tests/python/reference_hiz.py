@@ -4,11 +4,12 @@ docs/marches.md defines what the march finds: walking the reflected ray's
 screen-space line texel by texel from the texel after its origin, the first
 texel where the ray's depth span meets the texel's footprint range and the
 texel's tangent plane says Hit (the ray crosses it from the front, or is
-behind it by no more than a rounding slack) or Blocked (behind it within its
-thickness: report nothing, or with blocked="occluder" that texel's centre, as
-(u, v, edge fade, 0); (u, v, edge fade, ENTERED_HIDDEN) when the ray is deeper
-than HIDDEN_SHARE of the thickness or comes into it from behind, which means it
-came in by the object's hidden side). A texel's plane has its geometric normal, rebuilt
+behind it by no more than a rounding slack, or is a late crossing: see _texel)
+or Blocked (behind it within its thickness: report nothing, or with
+blocked="occluder" that texel's centre, as (u, v, edge fade, 0); (u, v, edge
+fade, ENTERED_HIDDEN) when the ray is deeper than HIDDEN_SHARE of the thickness
+behind the texel's depth or comes into it from behind, which means it came in by
+the object's hidden side). A texel's plane has its geometric normal, rebuilt
 from the positions (plane_normals()), not its shading normal. The core reaches the same texel through a min/max
 pyramid; this file visits every texel on the line, in Python floats (IEEE
 double), so agreeing with it shows the pyramid never skips one.
@@ -261,7 +262,8 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                     za, zb = depth(t), depth(te)
                     if max(za, zb) >= lo and min(za, zb) <= hi:
                         outcome, th = _texel(pos, planes, i, j, t, te, a0, a1, b0, b1, f0, d, w, h,
-                                             plane_row, plane_depth, texel_thickness, depth)
+                                             plane_row, plane_depth, texel_thickness, depth,
+                                             known_thickness(i, j) is not None)
                         if outcome in ("blocked", "entered"):
                             if blocked == "occluder":  # the texel's centre, no confidence
                                 result = (i + 0.5) / w, (j + 0.5) / h, outcome
@@ -283,8 +285,25 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
     return out
 
 
+def _in_front_before(pos, planes, i, j, ta, a0, a1, b0, b1, f0, d, w, h):
+    """Whether the ray, entering texel (i, j) at ta, lies in front of the plane of the
+    texel it came from (a CELL_NUDGE step back along each axis it moves on); True
+    where that texel is off the image, unseen or has no plane."""
+    q = f0 + ta * d - np.sign(d) * CELL_NUDGE
+    pi, pj = int(math.floor(q[0])), int(math.floor(q[1]))
+    if (pi, pj) == (i, j) or not (0 <= pi < w and 0 <= pj < h):
+        return True
+    o, n = pos[pj, pi], planes[pj, pi]
+    if not _seen(o) or not _usable(n):
+        return True
+    u = n / np.linalg.norm(n)
+    tol = PLANE_TOLERANCE * np.linalg.norm(o[:3])
+    b = b0 + ta * (b1 - b0)
+    return u @ (a0 + ta * (a1 - a0)) - (u @ o[:3]) * b >= -tol * b
+
+
 def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, plane_depth,
-           texel_thickness, depth):
+           texel_thickness, depth, thickness_known):
     n = planes[j, i]
     if not _usable(n):
         return "hit", ta
@@ -320,7 +339,14 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     if da <= slack:
         return "hit on plane", ta
     if da <= thick:  # inside: came in by the side it is nearer to, from the texel's own depth
-        return ("entered" if depth(ta) + p[2] > HIDDEN_SHARE * thick else "blocked"), ta
+        if depth(ta) + p[2] > HIDDEN_SHARE * thick:
+            return "entered", ta
+        # nearer the front: a crossing found late, reported as a hit where the ray
+        # entered when the back layer gives the thickness, the ray stays behind the
+        # plane to the exit and was in front of the previous texel's surface
+        if b_behind and thickness_known and _in_front_before(pos, planes, i, j, ta, a0, a1, b0, b1, f0, d, w, h):
+            return "hit on plane", ta
+        return "blocked", ta
     if b_behind and behind_by(tb) <= thick:
         return "entered", tb
     return "pass", ta

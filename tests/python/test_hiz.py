@@ -168,9 +168,7 @@ def test_an_entered_occluder_is_a_hidden_hit():
     """An occluder whose ray lies deeper than half the texel's thickness behind the
     texel's own depth, or comes into it from behind, came in by the object's hidden
     side: with the back-face layer nearly all of those rays' exact mirror hits are
-    hidden from the camera, while the other occluders are mostly crossings of a
-    visible front found a texel late, and few of them hidden: measured along the
-    texel's plane, 0.39 and 0.23 of them were (docs/marches.md, *Blocked rays*)."""
+    hidden from the camera (docs/marches.md, *Blocked rays*)."""
     for name, w, h in (("floor", 160, 120), ("floor-shift", 160, 120)):
         gb, mh, back = data(name, w, h)
         uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back,
@@ -184,8 +182,24 @@ def test_an_entered_occluder_is_a_hidden_hit():
               f"occluders, {late[front].mean():.3f} late crossings")
         assert entered.sum() > 100
         assert hidden[entered].mean() >= 0.9 and late[entered].mean() <= 0.05
-        assert late[front].mean() >= 0.3
-        assert hidden[front].mean() <= 0.3
+
+
+@pytest.mark.parametrize("name, recall", [("floor", 0.975), ("floor-shift", 0.975), ("wall", 0.985)])
+def test_a_late_crossing_is_a_hit(name, recall):
+    """With the back-face layer a ray found just behind a texel's front, that stays
+    behind its plane to the texel's exit and was in front of the surface it came
+    from, is a crossing found late and reports a hit (docs/marches.md, *Late
+    crossings*). Before, blocked="miss" reported nothing there: recall was 0.971,
+    0.968 and 0.980 on these scenes, precision 0.990-0.996."""
+    gb, mh, back = data(name, 160, 120)
+    kw = dict(glint_core.presets()["balanced"], resolution=1.0, antialias=0)
+    uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back, **kw)
+    p, r = score(uv, mh)
+    print(f"{name}: precision {p:.4f}, recall {r:.4f}")
+    assert r >= recall and p >= 0.985
+    # Without the back layer the thickness is a guess, and such a ray stays unreported.
+    plain = glint_core.trace(gb["position"], gb["normal"], gb["projection"], **kw)
+    assert score(plain, mh)[1] < r
 
 
 from reference_hiz import edge_fade  # noqa: E402  (docs/marches.md: the fade at the screen's edges)

@@ -145,6 +145,25 @@ const int HIT = 1;
 const int BLOCKED = 2;  // inside the thickness, nearer the front (march_hiz.cpp)
 const int ENTERED = 3;  // came in by the hidden side
 
+// in_front_before() in march_hiz.cpp: the ray, entering texel c at ta, lies in
+// front of the plane of the texel it came from (true where nothing says otherwise).
+bool in_front_before(ivec2 c, float ta) {
+  float back_x = g_d.x > 0.0 ? -CELL_NUDGE : (g_d.x < 0.0 ? CELL_NUDGE : 0.0);
+  float back_y = g_d.y > 0.0 ? -CELL_NUDGE : (g_d.y < 0.0 ? CELL_NUDGE : 0.0);
+  precise float qx = g_f0.x + ta * g_d.x;
+  precise float qy = g_f0.y + ta * g_d.y;
+  ivec2 q = ivec2(floor(qx + back_x), floor(qy + back_y));
+  if (q == c || q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) return true;
+  vec4 o = imageLoad(u_position_img, q);
+  vec3 n = imageLoad(u_planes, q).xyz;
+  if (!texel_seen(o) || !normal_usable(n)) return true;
+  precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  precise vec3 u = vec3(n.x * inv, n.y * inv, n.z * inv);
+  precise float tol = PLANE_TOLERANCE * sqrt(o.x * o.x + o.y * o.y + o.z * o.z);
+  precise float np = u.x * o.x + u.y * o.y + u.z * o.z;
+  return ray_plane(ta, u, np) >= -tol * ray_b(ta);
+}
+
 // n, p: the texel's plane normal (u_planes) and position, for the outline test after a hit.
 int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, out vec3 n, out vec3 p) {
   n = imageLoad(u_planes, c).xyz;
@@ -186,9 +205,17 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
     return HIT;
   }
   precise float share = HIDDEN_SHARE * thick;
-  // The side it came in by, from the texel's own depth (march_hiz.cpp says why).
+  // The side it came in by, from the texel's own depth, and a late crossing
+  // reported as a hit (texel_hit() in march_hiz.cpp says why).
   precise float dc = ray_depth(ta) + p.z;
-  if (da <= thick) return dc > share ? ENTERED : BLOCKED;
+  if (da <= thick) {
+    if (dc > share) return ENTERED;
+    if (b_behind && known_thickness(c, -p.z) > 0.0 && in_front_before(c, ta)) {
+      located = true;
+      return HIT;
+    }
+    return BLOCKED;
+  }
   if (b_behind) {
     precise float sxb = (g_f0.x + tb * g_d.x) * sxs - 1.0;
     precise float syb = (g_f0.y + tb * g_d.y) * sys - 1.0;

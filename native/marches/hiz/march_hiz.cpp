@@ -218,13 +218,34 @@ bool make_ray(const MarchSetup& s, int x, int y, Ray& r) {
 // What a texel does to the ray between fractions ta and tb.
 enum class TexelOutcome {
   Pass,     // in front of the surface, or behind its thickness: walk on
-  Hit,      // crosses the surface from the front: the reflection is there
+  Hit,      // crosses the surface from the front, or did so just before
+            // (a late crossing): the reflection is there
   Blocked,  // inside the surface's thickness, nearer its front: most likely
-            // a crossing of the front found a texel late; the walk ends
+            // a crossing of the front found a texel late, not sure enough for
+            // a hit; the walk ends
   Entered,  // inside the thickness, nearer its back, or crossing into it from
             // behind: the ray came in through the side the camera does not
             // see (a hidden hit); the walk ends
 };
+
+// Whether the ray, where it entered texel (i, j) at fraction ta, lies in
+// front of the plane of the texel it came from (true where that texel is
+// unseen, has no plane, or is off the image: nothing says otherwise).
+bool in_front_before(const Image& position, const HizPlanes& planes, const Ray& r, int i, int j, float ta) {
+  // A step back along the line, well past the nudge that picks cells.
+  const float back_x = r.d[0] > 0.0f ? -kCellNudge : (r.d[0] < 0.0f ? kCellNudge : 0.0f);
+  const float back_y = r.d[1] > 0.0f ? -kCellNudge : (r.d[1] < 0.0f ? kCellNudge : 0.0f);
+  const int pi = static_cast<int>(std::floor(r.f0[0] + ta * r.d[0] + back_x));
+  const int pj = static_cast<int>(std::floor(r.f0[1] + ta * r.d[1] + back_y));
+  if ((pi == i && pj == j) || pi < 0 || pj < 0 || pi >= position.width || pj >= position.height) return true;
+  const float* o = position.px(pi, pj);
+  const float* n = planes.px(pi, pj);
+  if (!texel_seen(o) || !normal_usable(n)) return true;
+  const float inv = 1.0f / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const float u[3] = {n[0] * inv, n[1] * inv, n[2] * inv};
+  const float tol = kPlaneTolerance * std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+  return r.plane(ta, u, u[0] * o[0] + u[1] * o[1] + u[2] * o[2]) >= -tol * r.b(ta);
+}
 
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
 // or it is behind the plane at the texel, where the texel's thickness says
@@ -276,8 +297,21 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
   // plane runs in front of a rounded object (the surface curves away from it),
   // while the middle of the front and back depths is where the two sides meet
   // at the outline (for a sphere, exactly the outline's depth).
-  if (da <= thick)
-    return r.depth(ta) + p[2] > kHiddenShare * thick ? TexelOutcome::Entered : TexelOutcome::Blocked;
+  if (da <= thick) {
+    if (r.depth(ta) + p[2] > kHiddenShare * thick) return TexelOutcome::Entered;
+    // Nearer the front: most likely a crossing found late. Sure enough to be
+    // reported as a hit where the ray entered the texel when the back-face
+    // layer gives the thickness (a guessed one also takes rays that pass
+    // behind thin things), the ray stays behind the plane to the texel's exit
+    // (one that comes back out in front grazed an edge), and it was in front
+    // of the surface of the texel it came from (behind it, it came from behind
+    // things). docs/marches.md, *Late crossings*.
+    if (b_behind && known_thickness(position, back, i, j) > 0.0f && in_front_before(position, planes, r, i, j, ta)) {
+      located = true;
+      return TexelOutcome::Hit;
+    }
+    return TexelOutcome::Blocked;
+  }
   if (b_behind && behind_by(tb) <= thick) return TexelOutcome::Entered;
   return TexelOutcome::Pass;
 }
