@@ -252,14 +252,11 @@ void bind_trace(pyb::module_& m) {
          int threads) {
         Image u = image_from_array(uv, "uv", 0.0f, 4);
         const Image p = image_from_array(position, "position", 1.0f, 4);
-        require_same_size(u, "uv", p, "position");
         Image b;
-        if (!back_position.is_none()) {
-          b = image_from_array(back_position, "back_position", 0.0f, 4);
-          require_same_size(b, "back_position", p, "position");
-        }
-        if (!(thickness >= 0.0f))
-          throw InvalidArgument("thickness", "expected a number >= 0, got " + std::to_string(thickness));
+        if (!back_position.is_none()) b = image_from_array(back_position, "back_position", 0.0f, 4);
+        TraceOptions o;  // the thickness's range, as trace() checks it
+        o.thickness = thickness;
+        validate(o);
         {
           pyb::gil_scoped_release release;
           read_inside_outlines(u, p, back_position.is_none() ? nullptr : &b, thickness, threads);

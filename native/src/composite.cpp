@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "glint/errors.h"
+#include "glint/validation.h"
 #include "parallel.h"
 
 namespace glint {
@@ -147,10 +148,8 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
 }
 
 void read_inside_outlines(Image& uv, const Image& pos, const Image* back_position, float thickness, int threads) {
-  if (uv.width != pos.width || uv.height != pos.height)
-    throw InvalidArgument("uv", "expected the position's size " + std::to_string(pos.width) + "x" +
-                                    std::to_string(pos.height) + ", got " + std::to_string(uv.width) + "x" +
-                                    std::to_string(uv.height));
+  require_same_size(pos, "position", uv, "uv");
+  if (back_position) require_same_size(pos, "position", *back_position, "back_position");
   const int w = pos.width, h = pos.height;
   auto inside_frame = [&](int x, int y) { return x >= 0 && y >= 0 && x < w && y < h; };
   parallel_rows(0, h, threads, [&](int y) {
@@ -160,13 +159,8 @@ void read_inside_outlines(Image& uv, const Image& pos, const Image* back_positio
       const int i = static_cast<int>(std::floor(t[0] * static_cast<float>(w)));
       const int j = static_cast<int>(std::floor(t[1] * static_cast<float>(h)));
       if (!inside_frame(i, j) || !texel_seen(pos.px(i, j))) continue;
-      const float d = -pos.px(i, j)[2];
-      float thick = thickness;
-      if (back_position) {
-        const float* b = back_position->px(i, j);
-        if (texel_seen(b) && -b[2] > d) thick = -b[2] - d;
-      }
-      const float bound = d + thick;  // thick >= 0: a NaN or negative option is refused before
+      // thickness >= 0: a NaN or negative option is refused before.
+      const float bound = -pos.px(i, j)[2] + texel_thickness(pos, back_position, thickness, i, j);
       auto outside = [&](int qx, int qy) {  // the frame's edge is no outline
         if (!inside_frame(qx, qy)) return false;
         const float* o = pos.px(qx, qy);

@@ -129,10 +129,14 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
   // Glint's look reads the colour inside the objects' outlines
   // (read_inside_outlines()); the seed's reads at the uv, as the book does.
   // The cone's footprint and the uv layer keep the trace's own uv.
-  Image read_at = uv;
-  if (opt.weighting == Weighting::Physical)
-    read_inside_outlines(read_at, in.position, tin.back_position, opt.trace.thickness, opt.threads);
-  Image color = backend.reflection_color(read_at, in.color);
+  const Image* read_at = &uv;
+  Image moved;
+  if (opt.weighting == Weighting::Physical) {
+    moved = uv;
+    read_inside_outlines(moved, in.position, tin.back_position, opt.trace.thickness, opt.threads);
+    read_at = &moved;
+  }
+  Image color = backend.reflection_color(*read_at, in.color);
   res.timings.push_back({"reflection_color", ms_since(t0), false});
 
   Image weight;

@@ -72,6 +72,22 @@ inline bool texel_seen(const float* p) {
          p[3] - p[3] == 0.0f;
 }
 
+// The thickness the back-face layer gives texel (x, y) of `position`, or -1
+// where it gives none (no layer, no back surface behind it).
+inline float known_thickness(const Image& position, const Image* back, int x, int y) {
+  if (!back) return -1.0f;
+  const float* b = back->px(x, y);
+  const float d = -position.px(x, y)[2];
+  return texel_seen(b) && -b[2] > d ? -b[2] - d : -1.0f;
+}
+
+// The thickness of texel (x, y): how far behind its surface still counts, the
+// back layer's where it has one, else `thickness` (TraceOptions::thickness).
+inline float texel_thickness(const Image& position, const Image* back, float thickness, int x, int y) {
+  const float t = known_thickness(position, back, x, y);
+  return t > 0.0f ? t : thickness;
+}
+
 // A pixel is reflective when its specular amount is positive (and finite).
 // Inline: a frame asks it of every pixel several times over.
 inline bool is_reflective(const float* spec) {

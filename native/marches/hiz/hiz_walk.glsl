@@ -145,22 +145,31 @@ const int HIT = 1;
 const int BLOCKED = 2;  // inside the thickness, nearer the front (march_hiz.cpp)
 const int ENTERED = 3;  // came in by the hidden side
 
+// unit_plane() in march_hiz.cpp: the unit normal u of usable normal n, u . p
+// and the rounding tolerance PLANE_TOLERANCE * |p|.
+void unit_plane(vec3 n, vec3 p, out vec3 u, out float np, out float tol) {
+  precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  precise vec3 pu = vec3(n.x * inv, n.y * inv, n.z * inv);
+  precise float pnp = pu.x * p.x + pu.y * p.y + pu.z * p.z;
+  precise float ptol = PLANE_TOLERANCE * sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  u = pu;
+  np = pnp;
+  tol = ptol;
+}
+
 // in_front_before() in march_hiz.cpp: the ray, entering texel c at ta, lies in
 // front of the plane of the texel it came from (true where nothing says otherwise).
 bool in_front_before(ivec2 c, float ta) {
-  float back_x = g_d.x > 0.0 ? -CELL_NUDGE : (g_d.x < 0.0 ? CELL_NUDGE : 0.0);
-  float back_y = g_d.y > 0.0 ? -CELL_NUDGE : (g_d.y < 0.0 ? CELL_NUDGE : 0.0);
   precise float qx = g_f0.x + ta * g_d.x;
   precise float qy = g_f0.y + ta * g_d.y;
-  ivec2 q = ivec2(floor(qx + back_x), floor(qy + back_y));
+  ivec2 q = ivec2(floor(qx - g_nudge.x), floor(qy - g_nudge.y));  // the cell nudge taken backwards
   if (q == c || q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) return true;
   vec4 o = imageLoad(u_position_img, q);
   vec3 n = imageLoad(u_planes, q).xyz;
   if (!texel_seen(o) || !normal_usable(n)) return true;
-  precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-  precise vec3 u = vec3(n.x * inv, n.y * inv, n.z * inv);
-  precise float tol = PLANE_TOLERANCE * sqrt(o.x * o.x + o.y * o.y + o.z * o.z);
-  precise float np = u.x * o.x + u.y * o.y + u.z * o.z;
+  vec3 u;
+  float np, tol;
+  unit_plane(n, o.xyz, u, np, tol);
   return ray_plane(ta, u, np) >= -tol * ray_b(ta);
 }
 
@@ -171,10 +180,9 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
   t_hit = ta;
   located = false;
   if (!normal_usable(n)) return HIT;
-  precise float inv = 1.0 / sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-  precise vec3 u = vec3(n.x * inv, n.y * inv, n.z * inv);
-  precise float np = u.x * p.x + u.y * p.y + u.z * p.z;
-  precise float tol = PLANE_TOLERANCE * sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  vec3 u;
+  float np, tol;
+  unit_plane(n, p, u, np, tol);
   float ga = ray_plane(ta, u, np);
   float gb = ray_plane(tb, u, np);
   precise float lim_a = -tol * ray_b(ta);

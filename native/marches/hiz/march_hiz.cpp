@@ -64,19 +64,18 @@ inline bool normal_usable(const float* n) {
   return finite(V3{n[0], n[1], n[2]}) && (n[0] != 0.0f || n[1] != 0.0f || n[2] != 0.0f);
 }
 
-// The thickness the back-face layer gives texel (x, y), or -1 where it gives
-// none (no layer, no back surface behind it).
-inline float known_thickness(const Image& position, const Image* back, int x, int y) {
-  if (!back) return -1.0f;
-  const float* b = back->px(x, y);
-  const float d = -position.px(x, y)[2];
-  return texel_seen(b) && -b[2] > d ? -b[2] - d : -1.0f;
-}
-
-// The thickness of texel (x, y): how far behind its surface still counts.
-inline float texel_thickness(const Image& position, const Image* back, float thickness, int x, int y) {
-  const float t = known_thickness(position, back, x, y);
-  return t > 0.0f ? t : thickness;
+// A texel's plane as the plane test uses it: the unit normal u, u . p for
+// its position p, and the rounding tolerance kPlaneTolerance * |p|. `n` must
+// be usable (normal_usable()).
+struct UnitPlane {
+  float u[3], np, tol;
+};
+inline UnitPlane unit_plane(const float* n, const float* p) {
+  const float inv = 1.0f / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  UnitPlane pl{{n[0] * inv, n[1] * inv, n[2] * inv}, 0.0f, 0.0f};
+  pl.np = pl.u[0] * p[0] + pl.u[1] * p[1] + pl.u[2] * p[2];
+  pl.tol = kPlaneTolerance * std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+  return pl;
 }
 
 // The plane row L of texel (x, y) in NDC (see plane_depth); false when the
@@ -232,19 +231,15 @@ enum class TexelOutcome {
 // front of the plane of the texel it came from (true where that texel is
 // unseen, has no plane, or is off the image: nothing says otherwise).
 bool in_front_before(const Image& position, const HizPlanes& planes, const Ray& r, int i, int j, float ta) {
-  // A step back along the line, well past the nudge that picks cells.
-  const float back_x = r.d[0] > 0.0f ? -kCellNudge : (r.d[0] < 0.0f ? kCellNudge : 0.0f);
-  const float back_y = r.d[1] > 0.0f ? -kCellNudge : (r.d[1] < 0.0f ? kCellNudge : 0.0f);
-  const int pi = static_cast<int>(std::floor(r.f0[0] + ta * r.d[0] + back_x));
-  const int pj = static_cast<int>(std::floor(r.f0[1] + ta * r.d[1] + back_y));
+  // The cell nudge taken backwards: the texel the line was in just before.
+  const int pi = static_cast<int>(std::floor(r.f0[0] + ta * r.d[0] - r.nudge[0]));
+  const int pj = static_cast<int>(std::floor(r.f0[1] + ta * r.d[1] - r.nudge[1]));
   if ((pi == i && pj == j) || pi < 0 || pj < 0 || pi >= position.width || pj >= position.height) return true;
   const float* o = position.px(pi, pj);
   const float* n = planes.px(pi, pj);
   if (!texel_seen(o) || !normal_usable(n)) return true;
-  const float inv = 1.0f / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  const float u[3] = {n[0] * inv, n[1] * inv, n[2] * inv};
-  const float tol = kPlaneTolerance * std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
-  return r.plane(ta, u, u[0] * o[0] + u[1] * o[1] + u[2] * o[2]) >= -tol * r.b(ta);
+  const UnitPlane pl = unit_plane(n, o);
+  return r.plane(ta, pl.u, pl.np) >= -pl.tol * r.b(ta);
 }
 
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
@@ -261,12 +256,9 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
   located = false;
   if (!normal_usable(n)) return TexelOutcome::Hit;  // no plane: the depth span decided
   const float* p = position.px(i, j);
-  const float inv = 1.0f / std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  const float u[3] = {n[0] * inv, n[1] * inv, n[2] * inv};
-  const float np = u[0] * p[0] + u[1] * p[1] + u[2] * p[2];
-  const float tol = kPlaneTolerance * std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-  const float ga = r.plane(ta, u, np), gb = r.plane(tb, u, np);
-  const bool a_behind = ga < -tol * r.b(ta), b_behind = gb < -tol * r.b(tb);
+  const UnitPlane pl = unit_plane(n, p);
+  const float ga = r.plane(ta, pl.u, pl.np), gb = r.plane(tb, pl.u, pl.np);
+  const bool a_behind = ga < -pl.tol * r.b(ta), b_behind = gb < -pl.tol * r.b(tb);
   if (!a_behind && !b_behind) return TexelOutcome::Pass;
   if (!a_behind) {
     const float f = ga / (ga - gb);  // G is linear in t: its zero, in [0, 1]
@@ -525,14 +517,6 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 
 namespace {
 
-// Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
-// would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
-// same smooth surface (reflective, normals within kReuseCos, view distances
-// within kReuseDepth of each other), and either all missed or all hit within
-// kReusePixels of each other. Then `out` is their miss, or their hits' mean
-// uv with each channel's least visibility (with blocked=occluder an occluder,
-// 0 in the 4th channel, counts as a hit). False also where the pixel itself
-// is not reflective: its own trace writes its 0 then.
 // What a report with visibility > 0 is: a hit (its own visibility in the
 // fourth channel), an occluder found late (0) or a hidden side entered
 // (kEnteredHidden). Neighbours of different kinds straddle an object's edge
@@ -541,6 +525,15 @@ namespace {
 // either.
 inline int report_kind(const float* o) { return o[3] > 0.0f ? 1 : (o[3] == 0.0f ? 0 : -1); }
 
+// Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
+// would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
+// same smooth surface (reflective, normals within kReuseCos, view distances
+// within kReuseDepth of each other), and either all missed or all hit within
+// kReusePixels of each other. Then `out` is their miss, or their hits' mean
+// uv with each channel's least visibility (with blocked=occluder an occluder,
+// 0 in the 4th channel, counts as a hit) when they are of one kind
+// (report_kind()). False also where the pixel itself is not reflective: its
+// own trace writes its 0 then.
 bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
                       float o[4]) {
   if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
