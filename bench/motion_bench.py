@@ -250,10 +250,11 @@ def run(size, frames, marches, backend="cpu", supersample=1, read_inside=True):
             opts = march_options(m)
             uv = glint_core.trace(P, N, proj, specular=S, back_position=B, backend=backend, **opts)
             dims[m] = dimming(uv, floor)
-            # Glint's look reads the colour inside the objects' outlines
-            # (docs/look-core.md, *Where the colour is read*); the seed's at the uv.
-            read = uv if m.startswith("seed") or not read_inside else glint_core.read_inside_outlines(
-                uv, P, back_position=B, thickness=opts["thickness"])
+            # The add-on's compositor reads the colour inside the objects' outlines
+            # whichever march traced (docs/look-core.md, *Where the colour is read*);
+            # the seed's row traces with the core's default thickness, and reads with it.
+            thickness = {"thickness": opts["thickness"]} if "thickness" in opts else {}
+            read = glint_core.read_inside_outlines(uv, P, back_position=B, **thickness) if read_inside else uv
             cur[m] = (sample(colour, read), E_faded if opts.get("march") == "hiz" else E_plain)
         for m, (R, E) in cur.items():
             norm = np.abs(E[floor]).sum() + 1e-12
