@@ -155,10 +155,10 @@ void read_inside_outlines(Image& uv, const Image& pos, const Image* back_positio
   parallel_rows(0, h, threads, [&](int y) {
     for (int x = 0; x < w; ++x) {
       float* t = uv.px(x, y);
-      if (!(t[2] > 0.0f) || !std::isfinite(t[0]) || !std::isfinite(t[1])) continue;
-      const int i = static_cast<int>(std::floor(t[0] * static_cast<float>(w)));
-      const int j = static_cast<int>(std::floor(t[1] * static_cast<float>(h)));
-      if (!inside_frame(i, j) || !texel_seen(pos.px(i, j))) continue;
+      int i = 0, j = 0;
+      if (!(t[2] > 0.0f) || !pos.texel_at(t[0] * static_cast<float>(w), t[1] * static_cast<float>(h), i, j) ||
+          !texel_seen(pos.px(i, j)))
+        continue;
       // thickness >= 0: a NaN or negative option is refused before.
       const float bound = -pos.px(i, j)[2] + texel_thickness(pos, back_position, thickness, i, j);
       auto outside = [&](int qx, int qy) {  // the frame's edge is no outline
@@ -192,9 +192,8 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
       const float* t = traced_uv.px(x, y);
       if (!(t[2] > 0.0f) || t[3] != hiz::kEnteredHidden) continue;  // a hit, an occluder, or nothing
       // The occluder's texel: blocked="occluder" reports its centre.
-      const int i = static_cast<int>(std::floor(t[0] * static_cast<float>(w)));
-      const int j = static_cast<int>(std::floor(t[1] * static_cast<float>(h)));
-      if (i < 0 || j < 0 || i >= w || j >= h) continue;
+      int i = 0, j = 0;
+      if (!traced_uv.texel_at(t[0] * static_cast<float>(w), t[1] * static_cast<float>(h), i, j)) continue;
       const float* a = back_albedo.px(i, j);
       if (!(a[3] > 0.0f)) continue;  // an open surface: nothing known behind it
       float* o = out.px(x, y);

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <random>
 #include <stdexcept>
@@ -16,7 +17,9 @@
 #include "analytic_scene.h"
 #include "parallel.h"
 #include "glint/errors.h"
+#include "glint/composite.h"
 #include "glint/pipeline.h"
+#include "glint/schema.h"
 
 using namespace glint;
 
@@ -273,4 +276,35 @@ TEST(Options, WeightingAndBlurNamesRoundTrip) {
   for (BlurMode b : {BlurMode::Cone, BlurMode::Box}) EXPECT_EQ(parse_blur_mode(to_string(b)), b);
   EXPECT_THROW(parse_weighting("pbr"), InvalidArgument);
   EXPECT_THROW(parse_blur_mode("gauss"), InvalidArgument);
+}
+
+// A uv from outside input can hold any float. Those far off the image must be
+// skipped, not converted to int (undefined behaviour the sanitized run reports).
+TEST(Composite, UvsFarOffTheImageAreSkipped) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const float far[] = {1e30f, -1e30f, 3e9f, -3e9f, inf, -inf, std::nanf("")};
+  Image pos(4, 4), back_albedo(4, 4, 1.0f), uv(4, 4);
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) pos.px(i, j)[2] = -1.0f, pos.px(i, j)[3] = 1.0f;
+  for (size_t k = 0; k < uv.pixel_count(); ++k) {
+    float* t = uv.data.data() + k * 4;
+    t[0] = far[k % 7];
+    t[1] = far[(k + 3) % 7];
+    t[2] = 1.0f;
+    t[3] = hiz::kEnteredHidden;
+  }
+  const Image before = uv;
+  read_inside_outlines(uv, pos, nullptr, 0.5f, 1);
+  for (size_t k = 0; k < uv.data.size(); ++k)
+    EXPECT_TRUE(uv.data[k] == before.data[k] || (std::isnan(uv.data[k]) && std::isnan(before.data[k])));
+  uint64_t count = 7;
+  const Image hidden = hidden_sides(uv, back_albedo, count, 1);
+  EXPECT_EQ(count, 0u);
+  for (float v : hidden.data) EXPECT_EQ(v, 0.0f);
+  int i = -1, j = -1;
+  EXPECT_TRUE(pos.texel_at(3.999f, 0.0f, i, j));
+  EXPECT_EQ(i, 3);
+  EXPECT_EQ(j, 0);
+  EXPECT_FALSE(pos.texel_at(4.0f, 0.0f, i, j));
+  EXPECT_FALSE(pos.texel_at(-0.001f, 0.0f, i, j));
 }

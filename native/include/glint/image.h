@@ -1,5 +1,6 @@
 // The one buffer type every stage reads and writes.
 #pragma once
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -73,6 +74,19 @@ struct Image {
   float* px(int x, int y) { return data.data() + (static_cast<size_t>(y) * width + x) * 4; }
   const float* px(int x, int y) const {
     return data.data() + (static_cast<size_t>(y) * width + x) * 4;
+  }
+
+  // The texel (i, j) holding the point (x, y), in pixels; false off the image,
+  // NaN included. The bounds are checked on the floats, before converting:
+  // a float beyond int's range converts with undefined behaviour, and rays
+  // and uvs from outside input can carry any value.
+  bool texel_at(float x, float y, int& i, int& j) const {
+    const float fx = std::floor(x), fy = std::floor(y);
+    if (!(fx >= 0.0f && fy >= 0.0f && fx < static_cast<float>(width) && fy < static_cast<float>(height)))
+      return false;
+    i = static_cast<int>(fx);
+    j = static_cast<int>(fy);
+    return true;
   }
 };
 

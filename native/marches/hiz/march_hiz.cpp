@@ -232,9 +232,10 @@ enum class TexelOutcome {
 // unseen, has no plane, or is off the image: nothing says otherwise).
 bool in_front_before(const Image& position, const HizPlanes& planes, const Ray& r, int i, int j, float ta) {
   // The cell nudge taken backwards: the texel the line was in just before.
-  const int pi = static_cast<int>(std::floor(r.f0[0] + ta * r.d[0] - r.nudge[0]));
-  const int pj = static_cast<int>(std::floor(r.f0[1] + ta * r.d[1] - r.nudge[1]));
-  if ((pi == i && pj == j) || pi < 0 || pj < 0 || pi >= position.width || pj >= position.height) return true;
+  int pi = 0, pj = 0;
+  if (!position.texel_at(r.f0[0] + ta * r.d[0] - r.nudge[0], r.f0[1] + ta * r.d[1] - r.nudge[1], pi, pj) ||
+      (pi == i && pj == j))
+    return true;
   const float* o = position.px(pi, pj);
   const float* n = planes.px(pi, pj);
   if (!texel_seen(o) || !normal_usable(n)) return true;

@@ -47,11 +47,9 @@ std::vector<float> view_distances(const Image& position, int threads);
 // its view distance (0 on a miss: the seed's cleared texel).
 inline long fetch_texel(const MarchSetup& s, float u, float v, float& scene_vd) {
   const Image& pos = *s.position;
-  const float fx = std::floor(u * static_cast<float>(pos.width));
-  const float fy = std::floor(v * static_cast<float>(pos.height));
-  if (fx >= 0.0f && fx < static_cast<float>(pos.width) && fy >= 0.0f &&
-      fy < static_cast<float>(pos.height)) {
-    const long i = static_cast<long>(fy) * pos.width + static_cast<long>(fx);
+  int x = 0, y = 0;
+  if (pos.texel_at(u * static_cast<float>(pos.width), v * static_cast<float>(pos.height), x, y)) {
+    const long i = static_cast<long>(y) * pos.width + x;
     const float vd = s.view_distance[i];
     if (vd == vd) {
       scene_vd = vd;
