@@ -47,14 +47,19 @@ SCENES = {
 }
 
 
-def score(uv, exact_uv, visible, tol=1.5):
+def counts(uv, exact_uv, visible, tol=1.5):
+    """(good, reported, visible): pixels reporting a hit within tol px of the exact
+    one, pixels reporting any, pixels whose exact mirror hit is visible."""
     h, w = visible.shape
     rep = uv[..., 2] > 1e-3
     err = np.hypot((uv[..., 0] - exact_uv[..., 0]) * w, (uv[..., 1] - exact_uv[..., 1]) * h)
     good = rep & visible & (err <= tol)
-    precision = good.sum() / rep.sum() if rep.any() else 1.0
-    recall = good.sum() / visible.sum() if visible.any() else 1.0
-    return precision, recall
+    return int(good.sum()), int(rep.sum()), int(visible.sum())
+
+
+def score(uv, exact_uv, visible, tol=1.5):
+    good, rep, vis = counts(uv, exact_uv, visible, tol)
+    return (good / rep if rep else 1.0), (good / vis if vis else 1.0)
 
 
 def scene_data(name, w, h, cache_dir):
@@ -132,6 +137,9 @@ def main():
     ap.add_argument("--antialias-levels", default="0",
                     help="with --coverage: the other antialias levels an antialiasing preset is also "
                          "run at, comma-separated (e.g. 0,1,2,3)")
+    ap.add_argument("--counts", action="store_true",
+                    help="also print the pixel counts behind precision and recall (good, reported, "
+                         "visible), to compare two builds exactly")
     ap.add_argument("--cost", action="store_true",
                     help="instead: time of the seed and the balanced preset against max_distance "
                          "and image size on the floor scene")
@@ -154,9 +162,9 @@ def main():
         # A preset named keeps its variants (", antialias N", " + back layer"); the
         # seed's row is the ratios' base.
         runs = [runs[0]] + [r for r in runs[1:] if r[0] in keep or r[3] in keep]
-    extra = " coverage err | partial err |" if args.coverage else ""
+    extra = (" coverage err | partial err |" if args.coverage else "") + (" good | reported | visible |" if args.counts else "")
     print("| scene | size | backend | march / preset | time ms | x seed | precision | recall |" + extra)
-    print("|---|---|---|---|---|---|---|---|" + ("---|---|" if args.coverage else ""))
+    print("|---|---|---|---|---|---|---|---|" + ("---|---|" if args.coverage else "") + ("---|---|---|" if args.counts else ""))
     for size in args.sizes.split(","):
         w, h = (int(v) for v in size.split("x"))
         for scene in args.scenes.split(","):
@@ -172,6 +180,8 @@ def main():
                 for (label, _, _, _), (ms, uv), ce in zip(runs, results, cov):
                     p, r = score(uv, d["exact_uv"], d["visible"])
                     tail = f" {ce[0]:.4f} | {ce[1]:.3f} |" if ce else ""
+                    if args.counts:
+                        tail += " {} | {} | {} |".format(*counts(uv, d["exact_uv"], d["visible"]))
                     print(f"| {scene} | {w}x{h} | {backend} | {label} | {ms:.0f} | {ms / seed_ms:.2f} | "
                           f"{p:.4f} | {r:.4f} |{tail}", flush=True)
 

@@ -356,9 +356,12 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
 # rays"), written from that description: pixels with both coordinates even keep
 # their own ray's result; any other pixel takes its traced neighbours' common
 # miss, or the mean of their hits when those lie within 3 pixels of each other
-# and are of one kind (hits, occluders, hidden sides),
-# provided that all of them lie on its own smooth surface; else its own ray's.
+# and are of one kind (hits, occluders, hidden sides), or are all real hits
+# within 6 pixels whose texels, and the mean's texel, lie on the first hit
+# texel's plane (then with their mean visibility); provided that all of them lie on its own smooth surface; else
+# its own ray's.
 REUSE_COS, REUSE_DEPTH, REUSE_PIXELS = _S.REUSE_COS, _S.REUSE_DEPTH, _S.REUSE_PIXELS
+REUSE_SPAN_PIXELS = _S.REUSE_SPAN_PIXELS
 
 
 def _kind(r):
@@ -373,6 +376,21 @@ def reuse_rays(position, normal, full):
     out = np.array(full, dtype=np.float64)
     pos = np.asarray(position, np.float64)
     nrm = np.asarray(normal, np.float64)[..., :3]
+
+    def texel(uv):
+        i, j = math.floor(uv[0] * w), math.floor(uv[1] * h)
+        return (j, i) if 0 <= i < w and 0 <= j < h else None
+
+    def on_plane(a, b):
+        """The texel under uv b lies on the plane of the texel under uv a."""
+        ta, tb = texel(a), texel(b)
+        if ta is None or tb is None or not _seen(pos[ta]) or not _seen(pos[tb]):
+            return False
+        n, m = nrm[ta], nrm[tb]
+        d = float(np.dot(n, m))
+        if not (d > 0 and d * d >= REUSE_COS ** 2 * float(np.dot(n, n)) * float(np.dot(m, m))):
+            return False
+        return abs(float(np.dot(n, pos[tb][:3] - pos[ta][:3]))) <= REUSE_DEPTH * abs(pos[ta][2]) * math.sqrt(float(np.dot(n, n)))
 
     def same_surface(y, x, qy, qx):
         if not (0 <= qx < w and 0 <= qy < h):
@@ -402,8 +420,15 @@ def reuse_rays(position, normal, full):
             hits = [g for g in got if g[2] > 0]
             if not hits:
                 out[y, x] = 0.0
-            elif len(hits) == len(got) and len({_kind(g) for g in got}) == 1 and all(
-                    math.hypot((a[0] - b[0]) * w, (a[1] - b[1]) * h) <= REUSE_PIXELS for a in got for b in got):
-                out[y, x] = (np.mean([g[0] for g in got]), np.mean([g[1] for g in got]),
-                             min(g[2] for g in got), min(g[3] for g in got))
+                continue
+            if len(hits) < len(got) or len({_kind(g) for g in got}) != 1:
+                continue
+            spread = max(math.hypot((a[0] - b[0]) * w, (a[1] - b[1]) * h) for a in got for b in got)
+            mean = (np.mean([g[0] for g in got]), np.mean([g[1] for g in got]))
+            if spread <= REUSE_PIXELS:
+                out[y, x] = (mean[0], mean[1], min(g[2] for g in got), min(g[3] for g in got))
+            elif (_kind(got[0]) == 1 and spread <= REUSE_SPAN_PIXELS
+                  and all(on_plane(got[0], b) for b in got[1:] + [mean])):
+                vis = np.mean([g[2] for g in got])  # on one plane, the mean visibility
+                out[y, x] = (mean[0], mean[1], vis, vis)
     return out

@@ -92,6 +92,46 @@ def test_reused_rays_agree_with_the_float64_reference(name, backend, blocked, re
     assert spread > 0.03 * ref[..., 0].size  # the reuse's uv means, not only copies
 
 
+@pytest.mark.parametrize("backend", ["cpu", "gl"])
+@pytest.mark.parametrize("name", ["floor", "wall"])
+def test_hits_further_apart_on_one_plane_are_reused(name, backend, request):
+    """A mirror stretches what it reflects: neighbours' hits 3 to 8 pixels apart are
+    shared when their texels and their mean's lie on one plane. The core takes them
+    where reference_hiz.reuse_rays does, and those pixels' uvs are where the exact
+    mirror ray lands, to a pixel (independent of both)."""
+    import reference_hiz as rules
+    if backend == "gl":
+        request.getfixturevalue("gl")
+    gb, mh, _ = data(name, 80, 60)
+    kw = dict(max_distance=15.0, thickness=0.5, blocked="miss")
+    core = glint_core.trace(gb["position"], gb["normal"], gb["projection"], march="hiz", steps=64,
+                            resolution=0.3, backend=backend, **kw)
+    full = reference_hiz(gb["position"], gb["normal"], gb["projection"], **kw)
+    ref = reuse_rays(gb["position"], gb["normal"], full)
+    span = rules.REUSE_SPAN_PIXELS
+    try:
+        rules.REUSE_SPAN_PIXELS = rules.REUSE_PIXELS
+        narrow = reuse_rays(gb["position"], gb["normal"], full)
+    finally:
+        rules.REUSE_SPAN_PIXELS = span
+    wide = np.abs(ref - narrow).max(axis=-1) > 0
+    agree = (np.abs(core - ref).max(axis=-1) < 1e-3)[wide]
+    h, w = wide.shape
+    def off(uv):  # pixels from the exact hit, on those pixels
+        return np.hypot((uv[..., 0] - mh["uv"][..., 0]) * w, (uv[..., 1] - mh["uv"][..., 1]) * h)[wide]
+    err, own = off(core), off(full)
+    print(f"{name} {backend}: {wide.sum()} pixels reused across more than "
+          f"{rules.REUSE_PIXELS:g} px, {agree.mean() * 100:.1f}% as the reference; from the exact hit, "
+          f"median / max {np.median(err):.3f} / {err.max():.3f} px (their own rays: "
+          f"{np.median(own):.3f} / {own.max():.3f})")
+    assert wide.sum() >= 20
+    assert agree.mean() >= 0.95
+    # Within the accuracy benchmark's 1.5 px everywhere, and a fraction of a pixel
+    # further than the pixel's own ray would land, at this coarse size.
+    assert mh["visible"][wide].all() and err.max() <= 1.5
+    assert np.median(err) <= np.median(own) + 0.35
+
+
 @pytest.mark.parametrize("back", [False, True])
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
 def test_occluders_agree_with_the_float64_reference(name, back):

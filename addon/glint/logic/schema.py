@@ -39,6 +39,8 @@ REUSE_COS = 0.98
 REUSE_DEPTH = 0.02
 # hiz: largest distance in pixels between hits that are shared
 REUSE_PIXELS = 3.0
+# hiz: largest distance in pixels between shared hits whose texels lie on one plane
+REUSE_SPAN_PIXELS = 6.0
 # hiz: the rotated grid's smaller offset from a pixel's centre, in pixels
 ANTIALIAS_NEAR = 0.125
 # hiz: the rotated grid's larger offset from a pixel's centre, in pixels
@@ -68,6 +70,7 @@ CONSTANTS = {
     "REUSE_COS": REUSE_COS,
     "REUSE_DEPTH": REUSE_DEPTH,
     "REUSE_PIXELS": REUSE_PIXELS,
+    "REUSE_SPAN_PIXELS": REUSE_SPAN_PIXELS,
     "ANTIALIAS_NEAR": ANTIALIAS_NEAR,
     "ANTIALIAS_FAR": ANTIALIAS_FAR,
     "REUSE_RESOLUTION": REUSE_RESOLUTION,

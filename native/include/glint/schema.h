@@ -91,6 +91,14 @@ constexpr float kFootprintSpread = 0.5f;
 constexpr float kReuseCos = 0.98f;
 constexpr float kReuseDepth = 0.02f;
 constexpr float kReusePixels = 3.0f;
+// Hits further apart than kReusePixels, up to this, are shared too when the
+// texels under every hit and under their mean lie on one plane (normals
+// within kReuseCos, each off the first's plane by at most kReuseDepth of its
+// view distance): a mirror stretches what it reflects, and between hits on
+// one plane the mean uv is where the pixel's own ray goes, up to the
+// projection's curvature. 8 pixels lost a few hits by 1.5-3 px near the
+// corridor's horizon; 6 lost none (docs/marches.md, *Reusing neighbours' rays*).
+constexpr float kReuseSpanPixels = 6.0f;
 // Antialiased outlines (docs/marches.md): a pixel whose hit meets a miss
 // beside it on the same surface also traces rays at these offsets from its
 // centre, in pixels: the rotated grid (-n, -f), (f, -n), (n, f), (-f, n),
@@ -154,6 +162,8 @@ inline constexpr Constant kConstants[] = {
      "hiz: largest relative view-distance difference of pixels that share a ray"},
     {"REUSE_PIXELS", Type::Float, hiz::kReusePixels, nullptr,
      "hiz: largest distance in pixels between hits that are shared"},
+    {"REUSE_SPAN_PIXELS", Type::Float, hiz::kReuseSpanPixels, nullptr,
+     "hiz: largest distance in pixels between shared hits whose texels lie on one plane"},
     {"ANTIALIAS_NEAR", Type::Float, hiz::kAntialiasNear, nullptr,
      "hiz: the rotated grid's smaller offset from a pixel's centre, in pixels"},
     {"ANTIALIAS_FAR", Type::Float, hiz::kAntialiasFar, nullptr,

@@ -47,6 +47,7 @@ constexpr float kEnteredHidden = hiz::kEnteredHidden;
 constexpr float kHiddenShare = hiz::kHiddenShare;
 constexpr float kFootprintSpread = hiz::kFootprintSpread;
 constexpr float kReusePixels = hiz::kReusePixels;
+constexpr float kReuseSpanPixels = hiz::kReuseSpanPixels;
 // Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
 constexpr int kMaxLevels = 32;
 
@@ -526,14 +527,36 @@ namespace {
 // either.
 inline int report_kind(const float* o) { return o[3] > 0.0f ? 1 : (o[3] == 0.0f ? 0 : -1); }
 
+// Whether the texel under uv b lies on the plane of the texel under uv a:
+// both seen, normals within kReuseCos, b off a's plane by at most
+// kReuseDepth of a's view distance.
+bool on_plane_of(const TraceInputs& in, const float* a, const float* b) {
+  const Image& pos = in.position;
+  const float w = static_cast<float>(pos.width), h = static_cast<float>(pos.height);
+  int ia = 0, ja = 0, ib = 0, jb = 0;
+  if (!pos.texel_at(a[0] * w, a[1] * h, ia, ja) || !pos.texel_at(b[0] * w, b[1] * h, ib, jb)) return false;
+  const float *pa = pos.px(ia, ja), *pb = pos.px(ib, jb);
+  if (!texel_seen(pa) || !texel_seen(pb)) return false;
+  const float *na = in.normal.px(ia, ja), *nb = in.normal.px(ib, jb);
+  const float nn = na[0] * na[0] + na[1] * na[1] + na[2] * na[2];
+  const float d = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
+  const float qq = nb[0] * nb[0] + nb[1] * nb[1] + nb[2] * nb[2];
+  if (!(d > 0.0f && d * d >= hiz::kReuseCos * hiz::kReuseCos * nn * qq)) return false;
+  const float g = na[0] * (pb[0] - pa[0]) + na[1] * (pb[1] - pa[1]) + na[2] * (pb[2] - pa[2]);
+  return std::fabs(g) <= hiz::kReuseDepth * std::fabs(pa[2]) * std::sqrt(nn);
+}
+
 // Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
 // would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
 // same smooth surface (reflective, normals within kReuseCos, view distances
 // within kReuseDepth of each other), and either all missed or all hit within
-// kReusePixels of each other. Then `out` is their miss, or their hits' mean
-// uv with each channel's least visibility (with blocked=occluder an occluder,
-// 0 in the 4th channel, counts as a hit) when they are of one kind
-// (report_kind()). False also where the pixel itself is not reflective: its
+// kReusePixels of each other, or all hit (real hits, not occluders) within
+// kReuseSpanPixels on one plane (on_plane_of() from the first hit's texel
+// to each other's and to their mean's). Then `out` is their miss, or their
+// hits' mean uv with each channel's least visibility (with blocked=occluder
+// an occluder, 0 in the 4th channel, counts as a hit) when they are of one
+// kind (report_kind()); the mean visibility when they are on one plane
+// further apart. False also where the pixel itself is not reflective: its
 // own trace writes its 0 then.
 bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
                       float o[4]) {
@@ -556,25 +579,42 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   if (hits < k) return false;
   const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
   const int kind = report_kind(out.px(q[0][0], q[0][1]));
+  const float span = kind == 1 ? kReuseSpanPixels : kReusePixels;
   float su = 0.0f, sv = 0.0f, vis = 1.0f, found = 1.0f;
+  float vis_sum = 0.0f;
+  bool wide = false;  // some hits are further apart than kReusePixels
   for (int a = 0; a < k; ++a) {
     const float* ha = out.px(q[a][0], q[a][1]);
     if (report_kind(ha) != kind) return false;
     for (int b = a + 1; b < k; ++b) {
       const float* hb = out.px(q[b][0], q[b][1]);
       const float du = (ha[0] - hb[0]) * w, dv = (ha[1] - hb[1]) * h;
-      if (!(du * du + dv * dv <= kReusePixels * kReusePixels)) return false;
+      const float d2 = du * du + dv * dv;
+      if (!(d2 <= span * span)) return false;
+      wide |= !(d2 <= kReusePixels * kReusePixels);
     }
     su += ha[0];
     sv += ha[1];
     vis = std::min(vis, ha[2]);
     found = std::min(found, ha[3]);
+    vis_sum += ha[2];
   }
   const float inv_k = 1.0f / static_cast<float>(k);
-  o[0] = su * inv_k;
-  o[1] = sv * inv_k;
-  o[2] = vis;
-  o[3] = found;
+  const float mean[2] = {su * inv_k, sv * inv_k};
+  if (wide) {
+    const float* h0 = out.px(q[0][0], q[0][1]);
+    for (int a = 1; a < k; ++a)
+      if (!on_plane_of(in, h0, out.px(q[a][0], q[a][1]))) return false;
+    if (!on_plane_of(in, h0, mean)) return false;
+  }
+  o[0] = mean[0];
+  o[1] = mean[1];
+  // On one plane a hit's visibility (edge fade times outline confidence)
+  // varies smoothly, so the mean is the pixel's own ray's; the least, over
+  // hits this far apart, would dim the screen's edge early. A hit's fourth
+  // channel is its visibility.
+  o[2] = wide ? vis_sum * inv_k : vis;
+  o[3] = wide ? o[2] : found;
   return true;
 }
 

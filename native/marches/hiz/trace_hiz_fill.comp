@@ -27,7 +27,8 @@ layout(rgba32f, binding = 2) uniform readonly image2D u_normal_img;
 layout(rgba32f, binding = 3) uniform readonly image2D u_specular_img;  // read when u_has_specular
 layout(rgba32f, binding = 4) uniform readonly image2D u_coarse;  // (w + 1) / 2 x (h + 1) / 2: pixel (2x, 2y)'s result
 
-// REUSE_COS, REUSE_DEPTH, REUSE_PIXELS: schema.glsl (glint::hiz::kReuse*).
+// REUSE_COS, REUSE_DEPTH, REUSE_PIXELS, REUSE_SPAN_PIXELS: schema.glsl
+// (glint::hiz::kReuse*).
 
 // A traced pixel as its neighbours see it.
 struct Traced {
@@ -69,12 +70,38 @@ bool on_surface(vec4 p, vec3 n, float nn, Traced q) {
 // A hit (1), an occluder found late (0) or a hidden side entered (-1).
 int report_kind(vec4 r) { return r.w > 0.0 ? 1 : (r.w == 0.0 ? 0 : -1); }
 
-// Two neighbours' hits within REUSE_PIXELS of each other.
-bool close_hits(vec4 ha, vec4 hb) {
+// Two neighbours' hits within `span` pixels of each other; `wide` is set
+// when they are further apart than REUSE_PIXELS.
+bool close_hits(vec4 ha, vec4 hb, float span, inout bool wide) {
   precise float du = (ha.x - hb.x) * u_size.x;
   precise float dv = (ha.y - hb.y) * u_size.y;
   precise float dist2 = du * du + dv * dv;
-  return dist2 <= REUSE_PIXELS * REUSE_PIXELS;
+  if (!(dist2 <= REUSE_PIXELS * REUSE_PIXELS)) wide = true;
+  return dist2 <= span * span;
+}
+
+// on_plane_of() in march_hiz.cpp: the texel under uv b lies on the plane of
+// the texel under uv a. Both uvs are hits' or their mean, inside the frame.
+bool on_plane_of(vec2 a, vec2 b) {
+  precise vec2 fa = floor(a * u_size);
+  precise vec2 fb = floor(b * u_size);
+  if (!(all(greaterThanEqual(fa, vec2(0.0))) && all(lessThan(fa, u_size)) && all(greaterThanEqual(fb, vec2(0.0))) &&
+        all(lessThan(fb, u_size))))
+    return false;
+  vec4 pa = imageLoad(u_position_img, ivec2(fa));
+  vec4 pb = imageLoad(u_position_img, ivec2(fb));
+  if (!texel_seen(pa) || !texel_seen(pb)) return false;
+  vec3 na = imageLoad(u_normal_img, ivec2(fa)).xyz;
+  vec3 nb = imageLoad(u_normal_img, ivec2(fb)).xyz;
+  precise float nn = na.x * na.x + na.y * na.y + na.z * na.z;
+  precise float d = na.x * nb.x + na.y * nb.y + na.z * nb.z;
+  precise float qq = nb.x * nb.x + nb.y * nb.y + nb.z * nb.z;
+  precise float dd = d * d;
+  precise float need = REUSE_COS * REUSE_COS * nn * qq;
+  if (!(d > 0.0) || !(dd >= need)) return false;
+  precise float g = na.x * (pb.x - pa.x) + na.y * (pb.y - pa.y) + na.z * (pb.z - pa.z);
+  precise float lim = REUSE_DEPTH * abs(pa.z) * sqrt(nn);
+  return abs(g) <= lim;
 }
 
 // reuse_neighbours() for the pixel at c, its k = 2 or 4 traced neighbours
@@ -98,9 +125,13 @@ bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k
   int kind = report_kind(q0.r);
   if (report_kind(q1.r) != kind) return false;
   if (k == 4 && (report_kind(q2.r) != kind || report_kind(q3.r) != kind)) return false;
-  if (!close_hits(q0.r, q1.r)) return false;
-  if (k == 4 && (!close_hits(q0.r, q2.r) || !close_hits(q0.r, q3.r) || !close_hits(q1.r, q2.r) ||
-                 !close_hits(q1.r, q3.r) || !close_hits(q2.r, q3.r)))
+  // Real hits further apart, up to REUSE_SPAN_PIXELS, when on one plane (below).
+  float span = kind == 1 ? REUSE_SPAN_PIXELS : REUSE_PIXELS;
+  bool wide = false;
+  if (!close_hits(q0.r, q1.r, span, wide)) return false;
+  if (k == 4 && (!close_hits(q0.r, q2.r, span, wide) || !close_hits(q0.r, q3.r, span, wide) ||
+                 !close_hits(q1.r, q2.r, span, wide) || !close_hits(q1.r, q3.r, span, wide) ||
+                 !close_hits(q2.r, q3.r, span, wide)))
     return false;
   // The sums in the CPU's order, from 0.
   precise float su = 0.0;
@@ -122,6 +153,21 @@ bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k
   precise float inv_k = 1.0 / float(k);
   precise float ou = su * inv_k;
   precise float ov = sv * inv_k;
+  if (wide) {
+    if (!on_plane_of(q0.r.xy, q1.r.xy) || !on_plane_of(q0.r.xy, vec2(ou, ov))) return false;
+    if (k == 4 && (!on_plane_of(q0.r.xy, q2.r.xy) || !on_plane_of(q0.r.xy, q3.r.xy))) return false;
+    // On one plane the mean visibility, summed in the CPU's order.
+    precise float vs = 0.0;
+    vs += q0.r.z;
+    vs += q1.r.z;
+    if (k == 4) {
+      vs += q2.r.z;
+      vs += q3.r.z;
+    }
+    precise float mv = vs * inv_k;
+    vis = mv;
+    found = mv;
+  }
   o = vec4(ou, ov, vis, found);
   return true;
 }
