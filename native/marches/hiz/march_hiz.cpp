@@ -538,12 +538,9 @@ bool on_plane_of(const TraceInputs& in, const float* a, const float* b) {
   const float *pa = pos.px(ia, ja), *pb = pos.px(ib, jb);
   if (!texel_seen(pa) || !texel_seen(pb)) return false;
   const float *na = in.normal.px(ia, ja), *nb = in.normal.px(ib, jb);
-  const float nn = na[0] * na[0] + na[1] * na[1] + na[2] * na[2];
-  const float d = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
-  const float qq = nb[0] * nb[0] + nb[1] * nb[1] + nb[2] * nb[2];
-  if (!(d > 0.0f && d * d >= hiz::kReuseCos * hiz::kReuseCos * nn * qq)) return false;
+  if (!normals_agree(na, nb)) return false;
   const float g = na[0] * (pb[0] - pa[0]) + na[1] * (pb[1] - pa[1]) + na[2] * (pb[2] - pa[2]);
-  return std::fabs(g) <= hiz::kReuseDepth * std::fabs(pa[2]) * std::sqrt(nn);
+  return std::fabs(g) <= hiz::kReuseDepth * std::fabs(pa[2]) * std::sqrt(na[0] * na[0] + na[1] * na[1] + na[2] * na[2]);
 }
 
 // Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray

@@ -53,10 +53,7 @@ bool same_surface(const TraceInputs& in, const float* p, const float* n, int qx,
   const float* pq = in.position.px(qx, qy);
   const float* nq = in.normal.px(qx, qy);
   if (!texel_seen(pq) || !(std::fabs(pq[2] - p[2]) <= hiz::kReuseDepth * std::fabs(p[2]))) return false;
-  const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  const float d = n[0] * nq[0] + n[1] * nq[1] + n[2] * nq[2];
-  const float qq = nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2];
-  return d > 0.0f && d * d >= hiz::kReuseCos * hiz::kReuseCos * nn * qq;
+  return normals_agree(n, nq);
 }
 
 std::vector<std::vector<int>> outline_pixels(const TraceInputs& in, const Image& out, int threads) {

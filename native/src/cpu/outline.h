@@ -28,6 +28,14 @@ inline Report report_of(const float* o) {
   return o[2] == 0.0f && o[3] == 0.0f ? Report::Miss : Report::Other;
 }
 
+// Whether normals n and m (any length) lie within hiz::kReuseCos of each other.
+inline bool normals_agree(const float* n, const float* m) {
+  const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  const float d = n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
+  const float mm = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+  return d > 0.0f && d * d >= hiz::kReuseCos * hiz::kReuseCos * nn * mm;
+}
+
 // Whether pixel (qx, qy) reflects and lies on the same smooth surface as the
 // pixel at position p with normal n: normals within hiz::kReuseCos, view
 // distances within hiz::kReuseDepth of each other (hiz's reuse of rays asks
