@@ -357,11 +357,12 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
 # their own ray's result; any other pixel takes its traced neighbours' common
 # miss, or the mean of their hits when those lie within 3 pixels of each other
 # and are of one kind (hits, occluders, hidden sides), or are all real hits
-# within 6 pixels whose texels, and the mean's texel, lie on the first hit
-# texel's plane (then with their mean visibility); provided that all of them lie on its own smooth surface; else
+# within 6 pixels, with visibilities within 0.1, whose texels and the mean's
+# texel lie on the first hit texel's plane (then with their mean visibility);
+# provided that all of them lie on its own smooth surface; else
 # its own ray's.
 REUSE_COS, REUSE_DEPTH, REUSE_PIXELS = _S.REUSE_COS, _S.REUSE_DEPTH, _S.REUSE_PIXELS
-REUSE_SPAN_PIXELS = _S.REUSE_SPAN_PIXELS
+REUSE_SPAN_PIXELS, REUSE_SPAN_VISIBILITY = _S.REUSE_SPAN_PIXELS, _S.REUSE_SPAN_VISIBILITY
 
 
 def _kind(r):
@@ -428,6 +429,7 @@ def reuse_rays(position, normal, full):
             if spread <= REUSE_PIXELS:
                 out[y, x] = (mean[0], mean[1], min(g[2] for g in got), min(g[3] for g in got))
             elif (_kind(got[0]) == 1 and spread <= REUSE_SPAN_PIXELS
+                  and max(g[2] for g in got) - min(g[2] for g in got) <= REUSE_SPAN_VISIBILITY
                   and all(on_plane(got[0], b) for b in got[1:] + [mean])):
                 vis = np.mean([g[2] for g in got])  # on one plane, the mean visibility
                 out[y, x] = (mean[0], mean[1], vis, vis)

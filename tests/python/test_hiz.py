@@ -95,7 +95,7 @@ def test_reused_rays_agree_with_the_float64_reference(name, backend, blocked, re
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
 @pytest.mark.parametrize("name", ["floor", "wall"])
 def test_hits_further_apart_on_one_plane_are_reused(name, backend, request):
-    """A mirror stretches what it reflects: neighbours' hits 3 to 8 pixels apart are
+    """A mirror stretches what it reflects: neighbours' hits 3 to 6 pixels apart are
     shared when their texels and their mean's lie on one plane. The core takes them
     where reference_hiz.reuse_rays does, and those pixels' uvs are where the exact
     mirror ray lands, to a pixel (independent of both)."""
@@ -124,7 +124,7 @@ def test_hits_further_apart_on_one_plane_are_reused(name, backend, request):
           f"{rules.REUSE_PIXELS:g} px, {agree.mean() * 100:.1f}% as the reference; from the exact hit, "
           f"median / max {np.median(err):.3f} / {err.max():.3f} px (their own rays: "
           f"{np.median(own):.3f} / {own.max():.3f})")
-    assert wide.sum() >= 20
+    assert wide.sum() >= 15
     assert agree.mean() >= 0.95
     # Within the accuracy benchmark's 1.5 px everywhere, and a fraction of a pixel
     # further than the pixel's own ray would land, at this coarse size.

@@ -41,6 +41,8 @@ REUSE_DEPTH = 0.02
 REUSE_PIXELS = 3.0
 # hiz: largest distance in pixels between shared hits whose texels lie on one plane
 REUSE_SPAN_PIXELS = 6.0
+# hiz: largest difference of visibility between hits shared across more than REUSE_PIXELS
+REUSE_SPAN_VISIBILITY = 0.1
 # hiz: the rotated grid's smaller offset from a pixel's centre, in pixels
 ANTIALIAS_NEAR = 0.125
 # hiz: the rotated grid's larger offset from a pixel's centre, in pixels
@@ -71,6 +73,7 @@ CONSTANTS = {
     "REUSE_DEPTH": REUSE_DEPTH,
     "REUSE_PIXELS": REUSE_PIXELS,
     "REUSE_SPAN_PIXELS": REUSE_SPAN_PIXELS,
+    "REUSE_SPAN_VISIBILITY": REUSE_SPAN_VISIBILITY,
     "ANTIALIAS_NEAR": ANTIALIAS_NEAR,
     "ANTIALIAS_FAR": ANTIALIAS_FAR,
     "REUSE_RESOLUTION": REUSE_RESOLUTION,

@@ -99,6 +99,10 @@ constexpr float kReusePixels = 3.0f;
 // projection's curvature. 8 pixels lost a few hits by 1.5-3 px near the
 // corridor's horizon; 6 lost none (docs/marches.md, *Reusing neighbours' rays*).
 constexpr float kReuseSpanPixels = 6.0f;
+// ... and only when their visibilities lie within this of each other: a step
+// in confidence between them is an outline (one hit on an object's rim), which
+// the pixel's own ray places better than a mean does.
+constexpr float kReuseSpanVisibility = 0.1f;
 // Antialiased outlines (docs/marches.md): a pixel whose hit meets a miss
 // beside it on the same surface also traces rays at these offsets from its
 // centre, in pixels: the rotated grid (-n, -f), (f, -n), (n, f), (-f, n),
@@ -164,6 +168,8 @@ inline constexpr Constant kConstants[] = {
      "hiz: largest distance in pixels between hits that are shared"},
     {"REUSE_SPAN_PIXELS", Type::Float, hiz::kReuseSpanPixels, nullptr,
      "hiz: largest distance in pixels between shared hits whose texels lie on one plane"},
+    {"REUSE_SPAN_VISIBILITY", Type::Float, hiz::kReuseSpanVisibility, nullptr,
+     "hiz: largest difference of visibility between hits shared across more than REUSE_PIXELS"},
     {"ANTIALIAS_NEAR", Type::Float, hiz::kAntialiasNear, nullptr,
      "hiz: the rotated grid's smaller offset from a pixel's centre, in pixels"},
     {"ANTIALIAS_FAR", Type::Float, hiz::kAntialiasFar, nullptr,

@@ -48,6 +48,7 @@ constexpr float kHiddenShare = hiz::kHiddenShare;
 constexpr float kFootprintSpread = hiz::kFootprintSpread;
 constexpr float kReusePixels = hiz::kReusePixels;
 constexpr float kReuseSpanPixels = hiz::kReuseSpanPixels;
+constexpr float kReuseSpanVisibility = hiz::kReuseSpanVisibility;
 // Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
 constexpr int kMaxLevels = 32;
 
@@ -549,7 +550,8 @@ bool on_plane_of(const TraceInputs& in, const float* a, const float* b) {
 // within kReuseDepth of each other), and either all missed or all hit within
 // kReusePixels of each other, or all hit (real hits, not occluders) within
 // kReuseSpanPixels on one plane (on_plane_of() from the first hit's texel
-// to each other's and to their mean's). Then `out` is their miss, or their
+// to each other's and to their mean's) with visibilities within
+// kReuseSpanVisibility. Then `out` is their miss, or their
 // hits' mean uv with each channel's least visibility (with blocked=occluder
 // an occluder, 0 in the 4th channel, counts as a hit) when they are of one
 // kind (report_kind()); the mean visibility when they are on one plane
@@ -578,7 +580,7 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   const int kind = report_kind(out.px(q[0][0], q[0][1]));
   const float span = kind == 1 ? kReuseSpanPixels : kReusePixels;
   float su = 0.0f, sv = 0.0f, vis = 1.0f, found = 1.0f;
-  float vis_sum = 0.0f;
+  float vis_sum = 0.0f, vis_max = 0.0f;
   bool wide = false;  // some hits are further apart than kReusePixels
   for (int a = 0; a < k; ++a) {
     const float* ha = out.px(q[a][0], q[a][1]);
@@ -595,10 +597,12 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
     vis = std::min(vis, ha[2]);
     found = std::min(found, ha[3]);
     vis_sum += ha[2];
+    vis_max = std::max(vis_max, ha[2]);
   }
   const float inv_k = 1.0f / static_cast<float>(k);
   const float mean[2] = {su * inv_k, sv * inv_k};
   if (wide) {
+    if (!(vis_max - vis <= kReuseSpanVisibility)) return false;
     const float* h0 = out.px(q[0][0], q[0][1]);
     for (int a = 1; a < k; ++a)
       if (!on_plane_of(in, h0, out.px(q[a][0], q[a][1]))) return false;

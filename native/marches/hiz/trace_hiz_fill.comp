@@ -27,8 +27,8 @@ layout(rgba32f, binding = 2) uniform readonly image2D u_normal_img;
 layout(rgba32f, binding = 3) uniform readonly image2D u_specular_img;  // read when u_has_specular
 layout(rgba32f, binding = 4) uniform readonly image2D u_coarse;  // (w + 1) / 2 x (h + 1) / 2: pixel (2x, 2y)'s result
 
-// REUSE_COS, REUSE_DEPTH, REUSE_PIXELS, REUSE_SPAN_PIXELS: schema.glsl
-// (glint::hiz::kReuse*).
+// REUSE_COS, REUSE_DEPTH, REUSE_PIXELS, REUSE_SPAN_PIXELS,
+// REUSE_SPAN_VISIBILITY: schema.glsl (glint::hiz::kReuse*).
 
 // A traced pixel as its neighbours see it.
 struct Traced {
@@ -154,6 +154,10 @@ bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k
   precise float ou = su * inv_k;
   precise float ov = sv * inv_k;
   if (wide) {
+    float vis_max = max(q0.r.z, q1.r.z);
+    if (k == 4) vis_max = max(vis_max, max(q2.r.z, q3.r.z));
+    precise float vis_step = vis_max - vis;
+    if (!(vis_step <= REUSE_SPAN_VISIBILITY)) return false;
     if (!on_plane_of(q0.r.xy, q1.r.xy) || !on_plane_of(q0.r.xy, vec2(ou, ov))) return false;
     if (k == 4 && (!on_plane_of(q0.r.xy, q2.r.xy) || !on_plane_of(q0.r.xy, q3.r.xy))) return false;
     // On one plane the mean visibility, summed in the CPU's order.
