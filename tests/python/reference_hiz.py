@@ -170,9 +170,9 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
         more than its thickness puts the object's edge somewhere between the two
         centres: a hit d texels toward it from the centre is on the object with
         chance 1 - d (UNCERTAIN at the texel's edge). Unless the back layer places
-        the edge: the square of the thickness, extrapolated as a line from the texel
-        opposite that neighbour through this one, reaches 0 at
-        s = t^2 / (t_in^2 - t^2) texels; a hit with d <= s is on the object."""
+        the edge: the thickness, extrapolated as a line from the texel opposite that
+        neighbour through this one, reaches 0 at s = t / (t_in - t) texels; a hit
+        with d <= s is on the object."""
         p, n = pos[y, x, :3], planes[y, x]
         lim = -texel_thickness(x, y) * np.linalg.norm(n)
         dx, dy = hx - (x + 0.5), hy - (y + 0.5)
@@ -189,7 +189,7 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
             ix, iy = 2 * x - qx, 2 * y - qy
             if t is not None and 0 <= ix < w and 0 <= iy < h and not across(ix, iy):
                 t_in = known_thickness(ix, iy)
-                if t_in is not None and t_in > t and d * (t_in * t_in - t * t) <= t * t:
+                if t_in is not None and t_in > t and d * (t_in - t) <= t:
                     continue
             c = min(c, 1.0 - 2.0 * (1.0 - UNCERTAIN) * d)
         return c

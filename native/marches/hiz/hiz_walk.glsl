@@ -262,10 +262,9 @@ float outline_confidence(ivec2 c, vec3 p, vec3 n, float hx, float hy) {
     ivec2 inner = nb[k ^ 1];
     if (t > 0.0 && on_screen(inner) && !across_outline(inner, p, n, lim)) {
       float t_in = known_thickness(inner, -imageLoad(u_position_img, inner).z);
-      precise float fall = t_in * t_in - t * t;
+      precise float fall = t_in - t;
       precise float reach = d * fall;
-      precise float t2 = t * t;
-      if (t_in > t && reach <= t2) continue;
+      if (t_in > t && reach <= t) continue;
     }
     precise float ck = 1.0 - 2.0 * (1.0 - UNCERTAIN) * d;
     conf = min(conf, ck);

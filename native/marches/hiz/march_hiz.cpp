@@ -321,13 +321,14 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
 // 1 on the inner half, falling to kUncertain at the texel's outer edge.
 //
 // The back-face layer can place the edge (docs/marches.md, *Visibility*): a
-// closed object's thickness along the view ray falls to 0 at its outline,
-// and for a rounded one its square falls about linearly (a sphere's exactly).
-// Extrapolated from the texel and the one opposite the outline, it reaches 0
-// at s = t^2 / (t_in^2 - t^2) texels past the centre; a hit before that is on
-// the object (confidence 1 from that side). Where the thickness does not fall
+// closed object's thickness along the view ray falls to 0 at its outline.
+// A mesh's outline runs along edges where a front and a back face meet, a
+// wedge, across which the thickness falls linearly: extrapolated from the
+// texel and the one opposite the outline, it reaches 0 at
+// s = t / (t_in - t) texels past the centre, and a hit before that is on the
+// object (confidence 1 from that side). Where the thickness does not fall
 // toward the outline (a box's flat side) nothing is placed and the rule above
-// stays; for a wedge the square's line places the edge short of the true one.
+// stays.
 float outline_confidence(const Image& position, const HizPlanes& normal, const Image* back, float thickness,
                          int i, int j, float hx, float hy) {
   const float* p = position.px(i, j);
@@ -352,8 +353,7 @@ float outline_confidence(const Image& position, const HizPlanes& normal, const I
     const int* in = nb[k ^ 1];  // the neighbour opposite the outline
     if (t > 0.0f && inside(in) && !across(in)) {
       const float t_in = known_thickness(position, back, in[0], in[1]);
-      const float fall = t_in * t_in - t * t;
-      if (t_in > t && d * fall <= t * t) continue;  // before the placed edge: on the object
+      if (t_in > t && d * (t_in - t) <= t) continue;  // before the placed edge: on the object
     }
     c = std::min(c, 1.0f - 2.0f * (1.0f - kUncertain) * d);
   }
