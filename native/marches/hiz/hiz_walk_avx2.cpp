@@ -59,11 +59,12 @@ __attribute__((always_inline)) inline void cell_range(const float* range, VI cel
 }
 
 // std::nextafter(t, +inf) for the values a running ray's t takes (finite,
-// below 1): the next float up.
+// below 1): the next float up. On unsigned bits: a vector select computes
+// both sides in every lane, and -0's bits minus one would overflow an int.
 __attribute__((always_inline)) inline VF next_up(VF t) {
-  const VI bits = reinterpret_cast<VI>(t);
-  const VI zero = {};
-  const VI up = t > 0.0f ? bits + 1 : (t < 0.0f ? bits - 1 : zero + 1);
+  const VU bits = reinterpret_cast<VU>(t);
+  const VU one = VU{} + 1u;
+  const VU up = t > 0.0f ? bits + one : (t < 0.0f ? bits - one : one);
   return reinterpret_cast<VF>(up);
 }
 
