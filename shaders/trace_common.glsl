@@ -40,13 +40,23 @@ double near_value(dvec3 v) {
   return r;
 }
 
+// Image::texel_at(): the texel q holding point xy, in pixels; false off the
+// image, NaN included. The bounds are checked on the floats, before
+// converting: int() of a float beyond int's range is undefined.
+bool texel_at(vec2 xy, out ivec2 q) {
+  precise vec2 f = floor(xy);
+  q = ivec2(0);
+  if (!(f.x >= 0.0 && f.y >= 0.0 && f.x < u_size.x && f.y < u_size.y)) return false;
+  q = ivec2(f);
+  return true;
+}
+
 // Fix 3 (docs/conventions.md): the nearest texel at floor(uv * size); off the image or on an
 // unseen texel is a miss, and a miss reads as (0, 0, 0, 0).
 bool fetch_position(vec2 uv, out vec4 p) {
-  precise float fx = floor(uv.x * u_size.x);
-  precise float fy = floor(uv.y * u_size.y);
-  if (fx >= 0.0 && fx < u_size.x && fy >= 0.0 && fy < u_size.y) {
-    vec4 t = texelFetch(u_position, ivec2(int(fx), int(fy)), 0);
+  ivec2 q;
+  if (texel_at(uv * u_size, q)) {
+    vec4 t = texelFetch(u_position, q, 0);
     if (texel_seen(t)) {
       p = t;
       return true;

@@ -162,11 +162,8 @@ void unit_plane(vec3 n, vec3 p, out vec3 u, out float np, out float tol) {
 bool in_front_before(ivec2 c, float ta) {
   precise float qx = g_f0.x + ta * g_d.x;
   precise float qy = g_f0.y + ta * g_d.y;
-  vec2 fq = floor(vec2(qx, qy) - g_nudge);  // the cell nudge taken backwards
-  // Bounds on the floats, as Image::texel_at: int() of a huge float is undefined.
-  if (!(all(greaterThanEqual(fq, vec2(0.0))) && all(lessThan(fq, u_size)))) return true;
-  ivec2 q = ivec2(fq);
-  if (q == c) return true;
+  ivec2 q;  // the cell nudge taken backwards
+  if (!texel_at(vec2(qx, qy) - g_nudge, q) || q == c) return true;
   vec4 o = imageLoad(u_position_img, q);
   vec3 n = imageLoad(u_planes, q).xyz;
   if (!texel_seen(o) || !normal_usable(n)) return true;

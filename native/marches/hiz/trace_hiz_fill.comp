@@ -51,6 +51,16 @@ Traced traced(ivec2 q) {
 
 // The per-neighbour half of reuse_neighbours(): q lies on the pixel's smooth
 // surface (p, n, nn = |n|^2).
+// normals_agree() in cpu/outline.h: normals n (|n|^2 = nn) and m lie within
+// REUSE_COS of each other.
+bool normals_agree(vec3 n, float nn, vec3 m) {
+  precise float d = n.x * m.x + n.y * m.y + n.z * m.z;
+  precise float mm = m.x * m.x + m.y * m.y + m.z * m.z;
+  precise float dd = d * d;
+  precise float need = REUSE_COS * REUSE_COS * nn * mm;
+  return d > 0.0 && dd >= need;
+}
+
 bool on_surface(vec4 p, vec3 n, float nn, Traced q) {
   if (!q.inside) return false;
   if (!q.reflective) return false;
@@ -59,12 +69,7 @@ bool on_surface(vec4 p, vec3 n, float nn, Traced q) {
   precise float dz = abs(pq.z - p.z);
   precise float lim = REUSE_DEPTH * abs(p.z);
   if (!texel_seen(pq) || !(dz <= lim)) return false;
-  precise float d = n.x * nq.x + n.y * nq.y + n.z * nq.z;
-  precise float qq = nq.x * nq.x + nq.y * nq.y + nq.z * nq.z;
-  precise float dd = d * d;
-  precise float need = REUSE_COS * REUSE_COS * nn * qq;
-  if (!(d > 0.0) || !(dd >= need)) return false;
-  return true;
+  return normals_agree(n, nn, nq);
 }
 
 // A hit (1), an occluder found late (0) or a hidden side entered (-1).
@@ -83,22 +88,15 @@ bool close_hits(vec4 ha, vec4 hb, float span, inout bool wide) {
 // on_plane_of() in march_hiz.cpp: the texel under uv b lies on the plane of
 // the texel under uv a. Both uvs are hits' or their mean, inside the frame.
 bool on_plane_of(vec2 a, vec2 b) {
-  precise vec2 fa = floor(a * u_size);
-  precise vec2 fb = floor(b * u_size);
-  if (!(all(greaterThanEqual(fa, vec2(0.0))) && all(lessThan(fa, u_size)) && all(greaterThanEqual(fb, vec2(0.0))) &&
-        all(lessThan(fb, u_size))))
-    return false;
-  vec4 pa = imageLoad(u_position_img, ivec2(fa));
-  vec4 pb = imageLoad(u_position_img, ivec2(fb));
+  ivec2 qa, qb;
+  if (!texel_at(a * u_size, qa) || !texel_at(b * u_size, qb)) return false;
+  vec4 pa = imageLoad(u_position_img, qa);
+  vec4 pb = imageLoad(u_position_img, qb);
   if (!texel_seen(pa) || !texel_seen(pb)) return false;
-  vec3 na = imageLoad(u_normal_img, ivec2(fa)).xyz;
-  vec3 nb = imageLoad(u_normal_img, ivec2(fb)).xyz;
+  vec3 na = imageLoad(u_normal_img, qa).xyz;
+  vec3 nb = imageLoad(u_normal_img, qb).xyz;
   precise float nn = na.x * na.x + na.y * na.y + na.z * na.z;
-  precise float d = na.x * nb.x + na.y * nb.y + na.z * nb.z;
-  precise float qq = nb.x * nb.x + nb.y * nb.y + nb.z * nb.z;
-  precise float dd = d * d;
-  precise float need = REUSE_COS * REUSE_COS * nn * qq;
-  if (!(d > 0.0) || !(dd >= need)) return false;
+  if (!normals_agree(na, nn, nb)) return false;
   precise float g = na.x * (pb.x - pa.x) + na.y * (pb.y - pa.y) + na.z * (pb.z - pa.z);
   precise float lim = REUSE_DEPTH * abs(pa.z) * sqrt(nn);
   return abs(g) <= lim;
