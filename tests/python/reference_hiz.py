@@ -382,14 +382,17 @@ def reuse_rays(position, normal, full):
         i, j = math.floor(uv[0] * w), math.floor(uv[1] * h)
         return (j, i) if 0 <= i < w and 0 <= j < h else None
 
+    def normals_agree(n, m):
+        d = float(np.dot(n, m))
+        return d > 0 and d * d >= REUSE_COS ** 2 * float(np.dot(n, n)) * float(np.dot(m, m))
+
     def on_plane(a, b):
         """The texel under uv b lies on the plane of the texel under uv a."""
         ta, tb = texel(a), texel(b)
         if ta is None or tb is None or not _seen(pos[ta]) or not _seen(pos[tb]):
             return False
-        n, m = nrm[ta], nrm[tb]
-        d = float(np.dot(n, m))
-        if not (d > 0 and d * d >= REUSE_COS ** 2 * float(np.dot(n, n)) * float(np.dot(m, m))):
+        n = nrm[ta]
+        if not normals_agree(n, nrm[tb]):
             return False
         return abs(float(np.dot(n, pos[tb][:3] - pos[ta][:3]))) <= REUSE_DEPTH * abs(pos[ta][2]) * math.sqrt(float(np.dot(n, n)))
 
@@ -399,9 +402,7 @@ def reuse_rays(position, normal, full):
         p, q = pos[y, x], pos[qy, qx]
         if not _seen(q) or not abs(q[2] - p[2]) <= REUSE_DEPTH * abs(p[2]):
             return False
-        n, m = nrm[y, x], nrm[qy, qx]
-        d = float(np.dot(n, m))
-        return d > 0 and d * d >= REUSE_COS ** 2 * float(np.dot(n, n)) * float(np.dot(m, m))
+        return normals_agree(nrm[y, x], nrm[qy, qx])
 
     for y in range(h):
         for x in range(w):
