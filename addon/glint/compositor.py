@@ -29,8 +29,8 @@ LAYOUT_KEY = "glint_layout"
 # A group saved with another hash (an older description, or lowered for a
 # Blender whose nodes take their options otherwise) is rebuilt.
 LAYOUT_HASH = hashlib.sha1((repr(sorted(cg.GROUP_NODES.items())) + repr(cg.GROUP_LINKS) +
-                            repr(cg.GROUP_OUTPUTS) + repr(host_nodes.options_are_sockets())
-                            ).encode()).hexdigest()[:12]
+                            repr(cg.GROUP_OUTPUTS) + repr(host_nodes.options_are_sockets()) +
+                            repr(host_nodes.soften_is_a_filter())).encode()).hexdigest()[:12]
 
 
 # ----------------------------------------------------------------------------
@@ -219,7 +219,9 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
         return
     hidden = settings_logic.shows_hidden_sides({"fill_hidden": glint.fill_hidden,
                                                 "hidden_sides": glint.hidden_sides})
-    for name, check in cg.switch_states(glint.debug_view, rough, bounce, world_specular, hidden).items():
+    states = cg.switch_states(glint.debug_view, rough, bounce, world_specular, hidden,
+                              host_nodes.soften_is_a_filter())
+    for name, check in states.items():
         node = group.nodes.get(name)
         if node is not None:
             host_nodes.set_switch(node, check)

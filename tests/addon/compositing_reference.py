@@ -35,13 +35,25 @@ def gauss_clamp(img, sigma):
     return out.astype(np.float32)
 
 
+def binomial_3x3(img):
+    """The 3x3 kernel (1 2 1; 2 4 2; 1 2 1) / 16, clamp to edge (float64)."""
+    h, w = img.shape[:2]
+    img = np.asarray(img, np.float64)
+    rows = img[np.clip(np.arange(h) - 1, 0, h - 1)] + 2 * img + img[np.clip(np.arange(h) + 1, 0, h - 1)]
+    cols = rows[:, np.clip(np.arange(w) - 1, 0, w - 1)] + 2 * rows + rows[:, np.clip(np.arange(w) + 1, 0, w - 1)]
+    return (cols / 16).astype(np.float32)
+
+
 def blurred_at_lod(D, lod, k=4):
-    """D at each pixel's lod between Gaussian levels (lods 2, 4, 6, 8, sigma
-    2^lod / 4.71: half its energy within a disc half the footprint's size): the first on D, the wider three on D read at the centres of
-    k x k blocks, blurred at sigma / k, mixed there by each block's mean lod
-    (over its pixels with lod > 0) and read back bilinearly at the pixels."""
+    """D at each pixel's lod between blur levels: lods 4, 6, 8 Gaussians of
+    sigma 2^lod / 4.71 (half their energy within a disc half the footprint's
+    size), and below them the 3x3 binomial filter, whose sigma sqrt(1/2) is the
+    lod log2(sqrt(1/2) x 4.71) = 1.74 by the same rule. The first on D, the
+    wider three on D read at the centres of k x k blocks, blurred at sigma / k,
+    mixed there by each block's mean lod (over its pixels with lod > 0) and
+    read back bilinearly at the pixels."""
     h, w = D.shape[:2]
-    lods = [2.0, 4.0, 6.0, 8.0]
+    lods = [math.log2(math.sqrt(0.5) * 4 * math.sqrt(2 * math.log(2))), 4.0, 6.0, 8.0]
     sig = [2.0 ** l / (4 * math.sqrt(2 * math.log(2))) for l in lods]
     ch, cw = -(-h // k), -(-w // k)
     cu = ((np.arange(cw) * k + k / 2) / w)[None, :] * np.ones((ch, 1))
@@ -58,7 +70,7 @@ def blurred_at_lod(D, lod, k=4):
         Q = (1 - f) * Q + f * gauss_clamp(Dc, sig[j] / k)
     fu = (((np.arange(w) + 0.5) / k) / cw)[None, :] * np.ones((h, 1))
     fv = (((np.arange(h) + 0.5) / k) / ch)[:, None] * np.ones((1, w))
-    levels = [(0.0, D), (lods[0], gauss_clamp(D, sig[0])), (lods[1], bilinear_clamp(Q, fu, fv))]
+    levels = [(0.0, D), (lods[0], binomial_3x3(D)), (lods[1], bilinear_clamp(Q, fu, fv))]
     R = np.array(D)
     for (l0, b0), (l1, b1) in zip(levels, levels[1:]):
         inside = (lod > l0) & (lod <= l1)

@@ -14,9 +14,13 @@ texels = load_logic("texels")
 
 # The abstract kinds' inputs and outputs as the description numbers them
 # (host/nodes.py maps them onto each Blender's sockets).
-INPUTS = {"math": 3, "mix": 3, "separate": 1, "combine": 4, "map_uv": 2, "blur": 1,
+INPUTS = {"math": 3, "mix": 3, "separate": 1, "combine": 4, "map_uv": 2, "blur": 1, "soften": 1,
           "switch": 2, "image": 0, "translate": 3}
 OUTPUTS = {"separate": 4, "image": 2}
+# float32 against the float64 formula, plus the first level's lift through the
+# 3x3 filter (compositing.SOFTEN_LIFT): D rounded to that float's spacing,
+# twice (on and off).
+ATOL = 1e-5 + 2 * float(np.spacing(np.float32(cg.SOFTEN_LIFT)))
 
 
 def test_links_name_real_nodes_and_sockets():
@@ -46,8 +50,28 @@ def test_blur_levels_hold_half_their_energy_in_the_cone_footprint():
         assert 1 - math.exp(-r * r / (2 * sigma * sigma)) == pytest.approx(0.5, abs=1e-9)
         j = cg.BLUR_LEVELS.index((lod, sigma)) + 1
         kind, props, defaults = cg.GROUP_NODES[f"blur_{j}"]
+        if j == 1:  # the 3x3 binomial filter, whose variance per axis is its sigma^2
+            taps = np.array([-1.0, 0.0, 1.0])
+            kernel = np.array(cg.SOFTEN_KERNEL) * 4.0
+            assert kind == "soften" and kernel.sum() == 1.0
+            assert float((kernel * taps * taps).sum()) == pytest.approx(sigma * sigma)
+            continue
         on_canvas = sigma / cg.COARSE if j > cg.FULL_LEVELS else sigma  # the wide levels blur coarse texels
         assert kind == "blur" and props["sigma"] == pytest.approx(on_canvas)
+
+
+def test_the_soften_level_is_the_3x3_binomial_kernel():
+    """The numpy model of Blender's Soften against the kernel written out: an
+    impulse spreads to (1 2 1; 2 4 2; 1 2 1) / 16, the edge texel repeated."""
+    img = np.zeros((5, 6, 4), np.float32)
+    img[2, 3] = 16.0
+    out = cg._softened(img)
+    want = np.zeros((5, 6), np.float32)
+    want[1:4, 2:5] = [[1, 2, 1], [2, 4, 2], [1, 2, 1]]
+    assert np.array_equal(out[..., 0], want) and np.array_equal(out[..., 3], want)
+    corner = np.zeros((3, 3, 4), np.float32)
+    corner[0, 0] = 16.0  # clamped: the corner texel weighs (1 + 2) / 4 along each axis
+    assert cg._softened(corner)[0, 0, 0] == pytest.approx(9.0)
 
 
 # -- an independent reference of the composite (sampling and blur: compositing_reference.py)
@@ -137,9 +161,9 @@ def test_group_computes_the_composite(engine_passes):
     if not engine_passes:  # an unlinked input is black: nothing replaced, the reflection added
         light = colour = np.zeros_like(base)
     want, R = reference_composite(base, uv, weight, lod, light, colour)
-    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
     assert np.array_equal(out["Image"][..., 3], base[..., 3])
-    assert np.allclose(out["Reflection"][..., :3], R, atol=1e-5)
+    assert np.allclose(out["Reflection"][..., :3], R, atol=ATOL)
     assert np.array_equal(out["Base"], base)
     assert np.array_equal(out["Visibility"], uv[..., 2])
     assert np.allclose(out["Engine Specular"][..., :3], light[..., :3] * colour[..., :3], atol=1e-6)
@@ -172,13 +196,13 @@ def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bou
         kw = dict(specular_light=light, specular_color=colour)
     out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
     want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden)
-    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
     # switched off, the hidden image is not read: the pixels only lose S
     off = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, **kw)
     hidden_off = hidden.copy()
     hidden_off[..., :3] = 0
     want_off, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden_off)
-    assert np.allclose(off["Image"][..., :3], want_off[..., :3], atol=1e-5)
+    assert np.allclose(off["Image"][..., :3], want_off[..., :3], atol=ATOL)
 
 
 def test_a_cleared_uv_image_passes_the_frame_through_whatever_the_hidden_image_holds():
@@ -202,8 +226,8 @@ def test_second_bounce_samples_the_frame_with_its_first(engine_passes):
     want, R = reference_composite(base, uv, weight, lod, light, colour, bounce=True)
     one, _ = reference_composite(base, uv, weight, lod, light, colour)
     assert np.abs(want - one).max() > 0.05  # the second bounce is there to be found
-    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=1e-5)
-    assert np.allclose(out["Reflection"][..., :3], R, atol=1e-5)
+    assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
+    assert np.allclose(out["Reflection"][..., :3], R, atol=ATOL)
     assert np.array_equal(out["Image"][..., 3], base[..., 3])
 
 
@@ -249,8 +273,8 @@ def test_the_world_path_is_the_passes_path_with_s_the_world_colour_times_w(bounc
                               gauss_clamp, world_specular=True, **kw)
     full = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
     want, _ = reference_composite(base, uv, weight, lod, world, w_image, bounce=bounce)
-    assert np.allclose(short["Image"][..., :3], want[..., :3], atol=1e-5)
-    assert np.allclose(full["Image"][..., :3], want[..., :3], atol=1e-5)
+    assert np.allclose(short["Image"][..., :3], want[..., :3], atol=ATOL)
+    assert np.allclose(full["Image"][..., :3], want[..., :3], atol=ATOL)
     assert np.abs(short["Image"] - base).max() > 0.05
 
 
@@ -263,7 +287,7 @@ def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
     hit = uv[..., 2] > 0
     C = np_map_uv(base, uv_image(uv))
     want = base[..., :3] + C[..., :3] * weight[..., :3] - uv[..., 2:3] * light[..., :3] * colour[..., :3]
-    assert np.allclose(out[hit, :3], want[hit], atol=1e-5)
+    assert np.allclose(out[hit, :3], want[hit], atol=ATOL)
     assert np.array_equal(out[~hit], base[~hit])
 
 
@@ -275,7 +299,7 @@ def test_without_rough_surfaces_the_levels_are_switched_off():
     on = cg.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s))
     off = cg.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s),
                             use_blur=False)
-    assert len(calls) == len(cg.BLUR_LEVELS)  # only the first evaluation blurred
+    assert len(calls) == len(cg.BLUR_LEVELS) - 1  # only the first evaluation blurred (level 1 is the 3x3 filter)
     assert np.allclose(on["Image"], off["Image"], atol=1e-6)
 
 
@@ -313,7 +337,9 @@ def test_debug_switches():
         assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, gauss_clamp,
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
-                                               "use_bounce": False, "use_passes": True, "use_hidden": False}
+                                               "use_bounce": False, "use_passes": True, "use_hidden": False,
+                                               "lift_in_1": True, "lift_out_1": True}
+    assert not any(cg.switch_states("NONE", soften_filters=False)[name] for name in ("lift_in_1", "lift_out_1"))
 
 
 def test_group_matches_glint_core_for_a_mirror(core):
@@ -331,7 +357,7 @@ def test_group_matches_glint_core_for_a_mirror(core):
     # the core clamps base - S coverage at 0; the random S here often exceeds the base
     ok = (base[..., :3] - S[..., :3] * color[..., 3:4] >= 0).all(axis=-1)
     assert ok.sum() > 50
-    assert np.allclose(out["Image"][ok, :3], want[ok, :3], atol=1e-5)
+    assert np.allclose(out["Image"][ok, :3], want[ok, :3], atol=ATOL)
 
 
 def test_debug_images():
@@ -477,3 +503,23 @@ def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
     assert none[cg.IMAGE_HIDDEN].shape[:2] == (2, 2) and not none[cg.IMAGE_HIDDEN].any()
     whole, at = cg.hidden_images(None, region, 30, 20, placeable=False)
     assert whole[cg.IMAGE_HIDDEN].shape[:2] == (18, 26) and at == (0.0, 0.0)
+
+
+def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sigma():
+    """Where the first level is a Fast Gaussian (host/nodes.soften_is_a_filter
+    false) the lift's mixes pass D through and ``blur`` gets SOFTEN_SIGMA: with
+    a ``blur`` that is the 3x3 kernel at that sigma, both hosts' groups agree."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene()
+    images = images_of(base, position, spec, uv, weight, lod)
+    sigmas = []
+
+    def blur(img, sigma):
+        sigmas.append(sigma)
+        return cg._softened(np.asarray(img, np.float32)) if sigma == cg.SOFTEN_SIGMA else gauss_clamp(img, sigma)
+
+    kw = dict(specular_light=light, specular_color=colour)
+    filt = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, **kw)
+    gauss = cg.evaluate_group(base, images, np_map_uv, blur, soften_filters=False, **kw)
+    assert sigmas.count(cg.SOFTEN_SIGMA) == 1 and len(sigmas) == len(cg.BLUR_LEVELS)
+    assert np.abs(filt["Reflection"]).max() > 0.01
+    assert np.allclose(filt["Image"], gauss["Image"], atol=ATOL)

@@ -196,6 +196,16 @@ def fast_gauss_size_per_sigma() -> float:
     return 2.0 if compositor_places_regions() else 3.0
 
 
+def soften_is_a_filter() -> bool:
+    """Whether the group's first blur level (abstract kind ``soften``) is the
+    Filter node's 3x3 Soften here, or a Fast Gaussian of the same sigma. In the
+    group at 1920x1080 the filter made what Glint adds to a frame 0.9x on 4.3
+    and 5.2, and 1.08x on the Tiled-era compositor of 3.x-4.1
+    (compositor_places_regions), whose filter reads its neighbours tile by
+    tile (docs/addon.md, *The first level as a 3x3 filter*)."""
+    return not compositor_places_regions()
+
+
 def _blur_size(size: float) -> int:
     # 3.4-4.5's Fast Gaussian takes an integer size that the Size input scales,
     # which together give the exact size.
@@ -222,9 +232,15 @@ _SOCKET_INPUTS = {
     "switch": {0: "Off", 1: "On"},
 }
 _SOCKET_OUTPUTS = {"mix": {0: "Result_Color"}}
+# Sockets whose index differs between hosts, on every host: kind -> {abstract
+# index: socket identifier}. The Filter node's image is its second input up to
+# 4.5 (after Fac) and its first from 5.0.
+_NAMED_INPUTS = {"soften": {0: "Image"}}
 
 
 def idname(kind: str) -> str:
+    if kind == "soften":
+        return "CompositorNodeFilter" if soften_is_a_filter() else idname("blur")
     return _IDNAMES[kind][1 if options_are_sockets() else 0]
 
 
@@ -262,7 +278,7 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
         node.use_clamp = bool(props.get("clamp", False))
     elif kind == "switch":
         set_switch(node, bool(props.get("on", False)))
-    elif kind == "blur":
+    elif kind == "blur" or (kind == "soften" and not soften_is_a_filter()):
         size = float(props["sigma"]) * fast_gauss_size_per_sigma()
         if sockets:
             _set_menu(node, "Type", "Fast Gaussian")
@@ -277,6 +293,14 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
                                ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
                 setattr(node, key, value)
             node.inputs[1].default_value = size / whole
+    elif kind == "soften":  # the Filter node (soften_is_a_filter)
+        # Soften is the Filter node's default type, at factor 1 (all filtered);
+        # set anyway, so that a Blender whose default moved still softens.
+        if sockets:
+            _set_menu(node, "Type", "Soften")
+        else:
+            node.filter_type = "SOFTEN"
+        _by_identifier(node.inputs, "Fac").default_value = 1.0
     elif kind == "translate":
         # Whole-pixel moves (logic/compositing.image_region): Nearest keeps them
         # exact where a Blender interpolates (4.2+); 3.4 has no such option.
@@ -301,6 +325,8 @@ def _by_identifier(sockets, identifier: str):
 
 
 def input_socket(node, kind: str, index: int):
+    if kind in _NAMED_INPUTS:
+        return _by_identifier(node.inputs, _NAMED_INPUTS[kind][index])
     if options_are_sockets() and kind in _SOCKET_INPUTS:
         return _by_identifier(node.inputs, _SOCKET_INPUTS[kind][index])
     if options_are_sockets() and kind == "switch":

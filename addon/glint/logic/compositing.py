@@ -49,8 +49,9 @@ Engines without
 those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
 
-The blur: :data:`BLUR_LEVELS` Gaussian levels of D (Blender's Fast Gaussian,
-whose cost does not grow with its size), blended by lod the way the core's
+The blur: :data:`BLUR_LEVELS` Gaussian levels of D (the first Blender's 3x3
+Soften filter, the others its Fast Gaussian, whose cost does not grow with its
+size), blended by lod the way the core's
 cone blur blends its mip levels: a pixel at lod l takes
 mix(..., mix(mix(D, B1, s1), B2, s2) ...), s_j = clamp((l - lod_{j-1}) /
 (lod_j - lod_{j-1}), 0, 1). A level j Gaussian holds half its energy within
@@ -64,7 +65,7 @@ surface. A frame with no rough reflective surface switches the levels off
 
 The coarse levels: a Fast Gaussian costs the same per pixel whatever its
 sigma, and the wide levels (sigma 3.4, 14 and 54 pixels) hold nothing finer
-than a few pixels. So only the first level (sigma 0.85) blurs the region's
+than a few pixels. So only the first level (sigma 0.71, the 3x3 filter) blurs the region's
 pixels; the others blur a canvas with one texel per COARSE x COARSE block,
 1/16 of the pixels. Map UV makes it: the coarse image's uv puts each texel at
 its block's centre, and Map UV's filter, which sizes itself by how far the uv
@@ -221,7 +222,28 @@ GBUFFER_DEBUG_VIEWS = ("POSITION", "NORMAL", "SPECULAR", "UV", "VISIBILITY")
 # share 0.5 gave 0.23 and 0.16 (docs/addon.md, *The coarse levels*).
 HALF_ENERGY_SIGMA = 1.0 / (2.0 * math.sqrt(2.0 * math.log(2.0)))
 LEVEL_FOOTPRINT_SHARE = 0.5
-BLUR_LEVELS = tuple((float(lod), HALF_ENERGY_SIGMA * LEVEL_FOOTPRINT_SHARE * 2.0 ** lod) for lod in (2, 4, 6, 8))
+# The first level is Blender's Filter node, Soften: the 3x3 binomial kernel
+# (1 2 1)^T (1 2 1) / 16, whose variance is 1/2 along each axis. It stands for
+# the Gaussian of that sigma (lod 1.74, where the Fast Gaussian it replaces sat
+# at lod 2, sigma 0.85) at a quarter of the cost on 5.2 and two thirds on 3.4
+# (docs/addon.md, *The first level as a 3x3 filter*).
+SOFTEN_SIGMA = math.sqrt(0.5)
+SOFTEN_KERNEL = (1.0 / 16.0, 2.0 / 16.0, 1.0 / 16.0)  # per axis: (1 2 1) / 4, outer product
+# Blender's Filter node clamps its result at 0 (3.4 to 5.2 alike), and D is
+# negative wherever the reflection darkens the frame. The kernel sums to 1, so
+# it filters D + SOFTEN_LIFT and the lift is taken off again: exact while
+# D > -SOFTEN_LIFT (an engine specular 256 times the frame's white being
+# replaced), at a rounding of 2^-15 (3e-5, below an 8-bit step of the darkest
+# sRGB grey).
+SOFTEN_LIFT = 256.0
+
+
+def _lod_of_sigma(sigma: float) -> float:
+    return math.log2(sigma / (HALF_ENERGY_SIGMA * LEVEL_FOOTPRINT_SHARE))
+
+
+BLUR_LEVELS = ((_lod_of_sigma(SOFTEN_SIGMA), SOFTEN_SIGMA),) + tuple(
+    (float(lod), HALF_ENERGY_SIGMA * LEVEL_FOOTPRINT_SHARE * 2.0 ** lod) for lod in (4, 6, 8))
 # The first FULL_LEVELS levels blur the region's pixels; the wider ones a
 # canvas with one texel per COARSE x COARSE block of the frame's pixels
 # ("The coarse levels" above). Level 2's sigma is 3.4 pixels, 0.85 texels.
@@ -231,6 +253,8 @@ COARSE = 4
 
 
 def _blur_node(sigma: float):
+    if sigma == SOFTEN_SIGMA:  # the sigma is for the hosts that run it as a Fast Gaussian
+        return ("soften", {"sigma": sigma}, {})
     return ("blur", {"sigma": sigma}, {})
 
 
@@ -341,6 +365,15 @@ for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma / COARSE if _coarse else _sigma)
     # s_j = clamp(lod / (lod_j - lod_{j-1}) - lod_{j-1} / (lod_j - lod_{j-1}), 0, 1)
     _factor = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
+    if GROUP_NODES[f"blur_{_j}"][0] == "soften":
+        # D + lift through the filter, minus lift; the Switches take the lift's
+        # mixes out where the host runs the level as a Fast Gaussian, which
+        # does not clamp (and, at the canvas's edge, would not keep a constant).
+        _lift = (SOFTEN_LIFT, SOFTEN_LIFT, SOFTEN_LIFT, 1.0)
+        GROUP_NODES[f"lift_{_j}"] = _mix("ADD", {0: 1.0, 2: _lift})
+        GROUP_NODES[f"drop_{_j}"] = _mix("SUBTRACT", {0: 1.0, 2: _lift})
+        GROUP_NODES[f"lift_in_{_j}"] = ("switch", {"on": True}, {})
+        GROUP_NODES[f"lift_out_{_j}"] = ("switch", {"on": True}, {})
     if _j <= FIRST_COARSE:  # mixed on the region's pixels
         GROUP_NODES[f"level_{_j}"] = _factor
         GROUP_NODES[f"mix_{_j}"] = _mix("MIX")
@@ -348,6 +381,9 @@ for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
         GROUP_NODES[f"coarse_level_{_j}"] = _factor
         GROUP_NODES[f"coarse_mix_{_j}"] = _mix("MIX")
 LAST_MIX = f"mix_{FIRST_COARSE}"  # the blurred D2 on the region's pixels
+# The Switches that route the first level through the lift (SOFTEN_LIFT): on
+# where that level is the 3x3 filter (switch_states()).
+SOFTEN_LIFT_SWITCHES = tuple(name for name in GROUP_NODES if name.startswith(("lift_in_", "lift_out_")))
 
 GROUP_IN = "__input__"
 GROUP_OUT = "__output__"
@@ -422,6 +458,11 @@ for _t, (_kind, _props, _) in GROUP_NODES.items():
         GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
     else:
         GROUP_LINKS += [("offset_back_x", 0, _t, 1), ("offset_back_y", 0, _t, 2)]
+def _level_out(j: int) -> str:
+    """The node whose output is blur level j."""
+    return f"lift_out_{j}" if f"lift_out_{j}" in GROUP_NODES else f"blur_{j}"
+
+
 # the blur levels work on the region: D2 is 0 on its border (the pad has no hit)
 GROUP_LINKS += [
     ("coarse_image", 0, "sep_coarse", 0),
@@ -430,25 +471,32 @@ GROUP_LINKS += [
     ("fine_image", 0, "from_coarse", 1),
 ]
 for _j in range(1, len(BLUR_LEVELS) + 1):
-    GROUP_LINKS.append(("to_coarse" if _j >= FIRST_COARSE else "use_bounce", 0, f"blur_{_j}", 0))
+    _source = "to_coarse" if _j >= FIRST_COARSE else "use_bounce"
+    if f"lift_{_j}" in GROUP_NODES:  # the filter's lift and drop around it (SOFTEN_LIFT)
+        GROUP_LINKS += [(_source, 0, f"lift_{_j}", 1), (_source, 0, f"lift_in_{_j}", 0),
+                        (f"lift_{_j}", 0, f"lift_in_{_j}", 1), (f"lift_in_{_j}", 0, f"blur_{_j}", 0),
+                        (f"blur_{_j}", 0, f"drop_{_j}", 1), (f"blur_{_j}", 0, f"lift_out_{_j}", 0),
+                        (f"drop_{_j}", 0, f"lift_out_{_j}", 1)]
+    else:
+        GROUP_LINKS.append((_source, 0, f"blur_{_j}", 0))
     if _j <= FIRST_COARSE:
         _below = "use_bounce" if _j == 1 else f"mix_{_j - 1}"
         GROUP_LINKS += [
             ("sep_weight", 3, f"level_{_j}", 0),
             (f"level_{_j}", 0, f"mix_{_j}", 0),
             (_below, 0, f"mix_{_j}", 1),
-            ("from_coarse" if _j == FIRST_COARSE else f"blur_{_j}", 0, f"mix_{_j}", 2),
+            ("from_coarse" if _j == FIRST_COARSE else _level_out(_j), 0, f"mix_{_j}", 2),
         ]
     else:
-        _below = f"blur_{_j - 1}" if _j == FIRST_COARSE + 1 else f"coarse_mix_{_j - 1}"
+        _below = _level_out(_j - 1) if _j == FIRST_COARSE + 1 else f"coarse_mix_{_j - 1}"
         GROUP_LINKS += [
             ("sep_coarse", 3, f"coarse_level_{_j}", 0),
             (f"coarse_level_{_j}", 0, f"coarse_mix_{_j}", 0),
             (_below, 0, f"coarse_mix_{_j}", 1),
-            (f"blur_{_j}", 0, f"coarse_mix_{_j}", 2),
+            (_level_out(_j), 0, f"coarse_mix_{_j}", 2),
         ]
 _last = len(BLUR_LEVELS)
-GROUP_LINKS.append((f"coarse_mix_{_last}" if _last > FIRST_COARSE else f"blur_{_last}", 0, "from_coarse", 0))
+GROUP_LINKS.append((f"coarse_mix_{_last}" if _last > FIRST_COARSE else _level_out(_last), 0, "from_coarse", 0))
 GROUP_LINKS += [
     # the Switch takes input 0 when off: the unblurred D2, levels not run
     ("use_bounce", 0, "use_blur", 0),
@@ -487,15 +535,20 @@ EXR_LAYERS = (
 
 
 def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False,
-                  world_specular: bool = False, use_hidden: bool = False) -> Dict[str, bool]:
+                  world_specular: bool = False, use_hidden: bool = False,
+                  soften_filters: bool = True) -> Dict[str, bool]:
     """The Switch nodes' ``check`` for a debug view, whether any reflective
     surface in the frame is rough, whether the second bounce runs, whether
     S is the world colour (Specular Light) times W (``world_specular``: the
-    group's Specular Color input is then not read) and whether hidden sides are
-    shown (``use_hidden``: the add-on then fills the hidden image every frame)."""
-    return {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
-            "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
-            "use_hidden": bool(use_hidden)}
+    group's Specular Color input is then not read), whether hidden sides are
+    shown (``use_hidden``: the add-on then fills the hidden image every frame)
+    and whether the first blur level is the 3x3 filter, which needs the lift
+    (``soften_filters``: host/nodes.soften_is_a_filter)."""
+    states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
+              "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
+              "use_hidden": bool(use_hidden)}
+    states.update((name, bool(soften_filters)) for name in SOFTEN_LIFT_SWITCHES)
+    return states
 
 
 # The second bounce setting: enum value -> (label, description).
@@ -760,6 +813,16 @@ def _canvas(values, frame_hw):
     return sizes.pop() if sizes else frame_hw
 
 
+def _softened(img: np.ndarray) -> np.ndarray:
+    """Blender's Filter node, Soften, at factor 1: the 3x3 kernel
+    SOFTEN_KERNEL x SOFTEN_KERNEL^T on every channel, the edge texels repeated
+    past the canvas."""
+    h, w = img.shape[:2]
+    k = [np.float32(4.0 * c) for c in SOFTEN_KERNEL]  # (1 2 1) / 4 per axis
+    rows = sum(k[i] * img[np.clip(np.arange(h) + i - 1, 0, h - 1)] for i in range(3))
+    return sum(k[i] * rows[:, np.clip(np.arange(w) + i - 1, 0, w - 1)] for i in range(3)).astype(np.float32)
+
+
 def _region_origin(region_hw, dx: float, dy: float, frame_hw) -> Tuple[int, int]:
     """The frame's column and row where a region-sized canvas, centred on the
     frame and translated by (dx, dy) pixels, starts; raises unless it lands on
@@ -802,8 +865,12 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    specular_light: Optional[np.ndarray] = None, specular_color: Optional[np.ndarray] = None,
                    debug_view: str = "NONE", use_blur: bool = True,
                    use_bounce: bool = False, world_specular: bool = False,
-                   use_hidden: bool = False) -> Dict[str, np.ndarray]:
+                   use_hidden: bool = False, soften_filters: bool = True) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
+
+    ``soften_filters``: the host runs the first level as the 3x3 filter
+    (host/nodes.soften_is_a_filter), else as ``blur`` at SOFTEN_SIGMA, the
+    lift's Switches off.
 
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
     Map UV and Fast Gaussian (e.g. a bilinear lookup and an exact Gaussian, to
@@ -826,7 +893,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     for src, so, dst, di in GROUP_LINKS:
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
-    switches = switch_states(debug_view, use_blur, use_bounce, world_specular, use_hidden)
+    switches = switch_states(debug_view, use_blur, use_bounce, world_specular, use_hidden, soften_filters)
 
     def inp(node, index):
         link = incoming.get((node, index))
@@ -842,14 +909,15 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
             elif GROUP_NODES[node][0] == "switch":  # resolved before anything runs: the other side is never read
                 cache[key] = inp(node, 1 if switches[node] else 0)
             else:
-                cache[key] = _node_output(node, index, lambda i: inp(node, i), frame_hw, images, map_uv, blur)
+                cache[key] = _node_output(node, index, lambda i: inp(node, i), frame_hw, images, map_uv, blur,
+                                          soften_filters)
         return cache[key]
 
     return {name: inp(GROUP_OUT, i) for i, (name, _) in enumerate(GROUP_OUTPUTS)}
 
 
 def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, images: Dict[str, np.ndarray],
-                 map_uv, blur) -> np.ndarray:
+                 map_uv, blur, soften_filters: bool = True) -> np.ndarray:
     """Output ``index`` of one of :data:`GROUP_NODES` (not a switch), given its
     inputs by number (``inp``), on the canvas Blender would give it."""
     kind, props, _ = GROUP_NODES[node]
@@ -871,6 +939,10 @@ def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, 
         return map_uv(inp(0), inp(1))
     if kind == "blur":
         return blur(inp(0), props["sigma"])
+    if kind == "soften":
+        if not soften_filters:
+            return blur(inp(0), props["sigma"])
+        return np.maximum(_softened(np.asarray(inp(0), np.float32)), 0.0)  # Blender clamps at 0
     if kind == "separate":
         src = inp(0)
         return _as_colour(src, tuple(_canvas([src], frame_hw)) + (4,))[..., index]
