@@ -220,7 +220,7 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
     hidden = settings_logic.shows_hidden_sides({"fill_hidden": glint.fill_hidden,
                                                 "hidden_sides": glint.hidden_sides})
     states = cg.switch_states(glint.debug_view, rough, bounce, world_specular, hidden,
-                              host_nodes.soften_is_a_filter())
+                              host_nodes.soften_is_a_filter(), not host_nodes.compositor_places_regions())
     for name, check in states.items():
         node = group.nodes.get(name)
         if node is not None:

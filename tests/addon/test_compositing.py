@@ -183,17 +183,23 @@ def with_hidden_sides(uv, seed=5):
 
 @pytest.mark.parametrize("world", [False, True])
 @pytest.mark.parametrize("bounce", [False, True])
-def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bounce):
+@pytest.mark.parametrize("whole_frame", [False, True])
+def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bounce, whole_frame):
+    """``whole_frame`` (a host whose group works on the whole frame): the light
+    is the frame itself, and the group does not read the hidden uv image."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     uv, hidden = with_hidden_sides(uv)
     assert (hidden[..., 3] > 0).sum() > 10
     images = images_of(base, position, spec, uv, weight, lod, hidden=hidden)
+    if whole_frame:
+        del images[cg.IMAGE_HIDDEN_UV]
     if world:  # S = the world colour x W (the world's path)
         colour = weight.copy()
         kw = dict(specular_light=light[0, 0], specular_color=weight, world_specular=True)
         light = np.broadcast_to(light[0, 0], base.shape)
     else:
         kw = dict(specular_light=light, specular_color=colour)
+    kw["whole_frame"] = whole_frame
     out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
     want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden)
     assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
@@ -338,7 +344,8 @@ def test_debug_switches():
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
                                                "use_bounce": False, "use_passes": True, "use_hidden": False,
-                                               "lift_in_1": True, "lift_out_1": True}
+                                               "hidden_at_pixel": False, "lift_in_1": True, "lift_out_1": True}
+    assert cg.switch_states("NONE", whole_frame=True)["hidden_at_pixel"]
     assert not any(cg.switch_states("NONE", soften_filters=False)[name] for name in ("lift_in_1", "lift_out_1"))
 
 
@@ -503,6 +510,7 @@ def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
     assert none[cg.IMAGE_HIDDEN].shape[:2] == (2, 2) and not none[cg.IMAGE_HIDDEN].any()
     whole, at = cg.hidden_images(None, region, 30, 20, placeable=False)
     assert whole[cg.IMAGE_HIDDEN].shape[:2] == (18, 26) and at == (0.0, 0.0)
+    assert cg.IMAGE_HIDDEN_UV not in whole  # the group reads the light from the frame there
 
 
 def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sigma():

@@ -314,6 +314,9 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "hidden_image": ("image", {"image": IMAGE_HIDDEN}, {}),
     "hidden_uv_image": ("image", {"image": IMAGE_HIDDEN_UV}, {}),
     "hidden_light": ("map_uv", {}, {}),             # the frame at each box pixel
+    # A group that works on the whole frame (the box is the frame) takes the
+    # frame itself: the same light, without a frame-sized Map UV and uv image.
+    "hidden_at_pixel": ("switch", {"on": False}, {}),
     "hidden_colour": _mix("MULTIPLY", {0: 1.0}),   # albedo * frame
     "hidden_to_region": _translate(1, onto="region"),
     "with_hidden": _mix("ADD"),                    # C + rep * albedo * frame
@@ -401,7 +404,9 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     (GROUP_IN, 0, "hidden_light", 0),
     ("hidden_uv_image", 0, "hidden_light", 1),
     ("hidden_image", 0, "hidden_colour", 1),
-    ("hidden_light", 0, "hidden_colour", 2),
+    ("hidden_light", 0, "hidden_at_pixel", 0),
+    (GROUP_IN, 0, "hidden_at_pixel", 1),
+    ("hidden_at_pixel", 0, "hidden_colour", 2),
     ("hidden_colour", 0, "hidden_to_region", 0),
     ("sep_uv", 3, "with_hidden", 0),
     ("map_uv", 0, "with_hidden", 1),
@@ -536,17 +541,20 @@ EXR_LAYERS = (
 
 def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False,
                   world_specular: bool = False, use_hidden: bool = False,
-                  soften_filters: bool = True) -> Dict[str, bool]:
+                  soften_filters: bool = True, whole_frame: bool = False) -> Dict[str, bool]:
     """The Switch nodes' ``check`` for a debug view, whether any reflective
     surface in the frame is rough, whether the second bounce runs, whether
     S is the world colour (Specular Light) times W (``world_specular``: the
     group's Specular Color input is then not read), whether hidden sides are
     shown (``use_hidden``: the add-on then fills the hidden image every frame)
-    and whether the first blur level is the 3x3 filter, which needs the lift
-    (``soften_filters``: host/nodes.soften_is_a_filter)."""
+    whether the first blur level is the 3x3 filter, which needs the lift
+    (``soften_filters``: host/nodes.soften_is_a_filter), and whether the group
+    works on the whole frame (``whole_frame``: a compositor that cannot place a
+    region, host/nodes.compositor_places_regions), where a hidden side's
+    light is the frame at the pixel as it is."""
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
-              "use_hidden": bool(use_hidden)}
+              "use_hidden": bool(use_hidden), "hidden_at_pixel": bool(whole_frame)}
     states.update((name, bool(soften_filters)) for name in SOFTEN_LIFT_SWITCHES)
     return states
 
@@ -671,18 +679,22 @@ def hidden_images(hidden: Optional[np.ndarray], region: Tuple[int, int, int, int
     1 on the hidden sides, 0 on the box's other pixels, which Map UV then does
     not filter). Not
     ``placeable`` (a compositor that takes a Translate's offset as one value,
-    host/nodes.compositor_places_regions): the box is the region."""
+    host/nodes.compositor_places_regions): the box is the region, which is the
+    frame, and the group reads the light from the frame itself (its
+    ``hidden_at_pixel`` Switch): no uv image."""
     seen = np.zeros((height, width), bool) if hidden is None else np.asarray(hidden)[..., 3] > 0
     x0, y0, x1, y1 = hidden_box(seen, region) if placeable else region
     albedo = np.zeros((y1 - y0, x1 - x0, 4), np.float32) if hidden is None else hidden[y0:y1, x0:x1]
+    rx0, ry0, rx1, ry1 = region
+    offset = (x0 + (x1 - x0) / 2.0 - (rx0 + rx1) / 2.0, y0 + (y1 - y0) / 2.0 - (ry0 + ry1) / 2.0)
+    if not placeable:
+        return {IMAGE_HIDDEN: albedo}, offset
     own = np.ones((y1 - y0, x1 - x0, 4), np.float32)
     own[..., 0] = ((np.arange(x0, x1) + 0.5) / width)[None, :]
     own[..., 1] = ((np.arange(y0, y1) + 0.5) / height)[:, None]
     # Map UV filters only where the third channel is above 0: the box's other
     # pixels, whose albedo is 0, cost it the uv reads alone.
     own[..., 2] = seen[y0:y1, x0:x1]
-    rx0, ry0, rx1, ry1 = region
-    offset = (x0 + (x1 - x0) / 2.0 - (rx0 + rx1) / 2.0, y0 + (y1 - y0) / 2.0 - (ry0 + ry1) / 2.0)
     return {IMAGE_HIDDEN: albedo, IMAGE_HIDDEN_UV: own}, offset
 
 
@@ -865,12 +877,14 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    specular_light: Optional[np.ndarray] = None, specular_color: Optional[np.ndarray] = None,
                    debug_view: str = "NONE", use_blur: bool = True,
                    use_bounce: bool = False, world_specular: bool = False,
-                   use_hidden: bool = False, soften_filters: bool = True) -> Dict[str, np.ndarray]:
+                   use_hidden: bool = False, soften_filters: bool = True,
+                   whole_frame: bool = False) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
 
     ``soften_filters``: the host runs the first level as the 3x3 filter
     (host/nodes.soften_is_a_filter), else as ``blur`` at SOFTEN_SIGMA, the
-    lift's Switches off.
+    lift's Switches off. ``whole_frame``: the host's group works on the whole
+    frame (``images`` frame-sized), and a hidden side's light is the frame.
 
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
     Map UV and Fast Gaussian (e.g. a bilinear lookup and an exact Gaussian, to
@@ -893,7 +907,8 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
     for src, so, dst, di in GROUP_LINKS:
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
-    switches = switch_states(debug_view, use_blur, use_bounce, world_specular, use_hidden, soften_filters)
+    switches = switch_states(debug_view, use_blur, use_bounce, world_specular, use_hidden, soften_filters,
+                             whole_frame)
 
     def inp(node, index):
         link = incoming.get((node, index))
