@@ -47,13 +47,13 @@ def binomial_3x3(img):
 def blurred_at_lod(D, lod, k=4):
     """D at each pixel's lod between blur levels: lods 4, 6, 8 Gaussians of
     sigma 2^lod / 4.71 (half their energy within a disc half the footprint's
-    size), and below them the 3x3 binomial filter, whose sigma sqrt(1/2) is the
-    lod log2(sqrt(1/2) x 4.71) = 1.74 by the same rule. The first on D, the
-    wider three on D read at the centres of k x k blocks, blurred at sigma / k,
-    mixed there by each block's mean lod (over its pixels with lod > 0) and
-    read back bilinearly at the pixels."""
+    size), and at lod 2 the 3x3 binomial filter (sigma sqrt(1/2), where the
+    rule would give 0.85). The first on D, the wider three on D read at the
+    centres of k x k blocks, blurred at sigma / k, mixed there by each block's
+    mean lod (over its pixels with lod > 0) and read back bilinearly at the
+    pixels."""
     h, w = D.shape[:2]
-    lods = [math.log2(math.sqrt(0.5) * 4 * math.sqrt(2 * math.log(2))), 4.0, 6.0, 8.0]
+    lods = [2.0, 4.0, 6.0, 8.0]
     sig = [2.0 ** l / (4 * math.sqrt(2 * math.log(2))) for l in lods]
     ch, cw = -(-h // k), -(-w // k)
     cu = ((np.arange(cw) * k + k / 2) / w)[None, :] * np.ones((ch, 1))

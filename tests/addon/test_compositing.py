@@ -46,16 +46,18 @@ def test_blur_levels_hold_half_their_energy_in_the_cone_footprint():
     footprint 2^lod."""
     assert cg.LEVEL_FOOTPRINT_SHARE == 0.5
     for lod, sigma in cg.BLUR_LEVELS:
-        r = 2.0 ** lod / 4
-        assert 1 - math.exp(-r * r / (2 * sigma * sigma)) == pytest.approx(0.5, abs=1e-9)
         j = cg.BLUR_LEVELS.index((lod, sigma)) + 1
         kind, props, defaults = cg.GROUP_NODES[f"blur_{j}"]
-        if j == 1:  # the 3x3 binomial filter, whose variance per axis is its sigma^2
+        if j == 1:  # the 3x3 binomial filter, whose variance per axis is its sigma^2, at lod 2
             taps = np.array([-1.0, 0.0, 1.0])
             kernel = np.array(cg.SOFTEN_KERNEL) * 4.0
             assert kind == "soften" and kernel.sum() == 1.0
             assert float((kernel * taps * taps).sum()) == pytest.approx(sigma * sigma)
+            rule = 2.0 ** lod / 4 / math.sqrt(2 * math.log(2))  # the sigma the rule asks at its lod
+            assert lod == 2.0 and sigma == pytest.approx(0.83 * rule, abs=0.01)
             continue
+        r = 2.0 ** lod / 4
+        assert 1 - math.exp(-r * r / (2 * sigma * sigma)) == pytest.approx(0.5, abs=1e-9)
         on_canvas = sigma / cg.COARSE if j > cg.FULL_LEVELS else sigma  # the wide levels blur coarse texels
         assert kind == "blur" and props["sigma"] == pytest.approx(on_canvas)
 
