@@ -6,12 +6,14 @@ warm-up):
 
   fast_gauss  Blur, Fast Gaussian (the group's blur levels; its cost does not grow with
               the size, so one size stands for all)
+  soften      the group's first blur level as this Blender's host layer makes it: the
+              Filter node's 3x3 Soften after 4.1, a Fast Gaussian of sigma 0.71 before
   map_uv      Map UV with a smooth uv image hitting every pixel (the group's reflection
               and second bounce)
   mix         Mix, Add (the group's many per-pixel mixes)
 
   blender -b --factory-startup -noaudio --python bench/compositor_nodes.py -- \
-      [--size 1920x1080] [--rounds 3] [--kinds fast_gauss:1,fast_gauss:4,map_uv:1,mix:4]
+      [--size 1920x1080] [--rounds 3] [--kinds fast_gauss:1,fast_gauss:4,soften:1,map_uv:1,mix:4]
 
 docs/addon.md (The cost of a frame) has the figures and what they mean for a frame.
 """
@@ -35,7 +37,7 @@ from glint import host  # noqa: E402  (the compositor tree of this Blender)
 
 def _args():
     return kit.script_options(
-        {"size": (1920, 1080), "rounds": 3, "kinds": ["fast_gauss:1", "fast_gauss:4", "map_uv:1", "mix:4"]},
+        {"size": (1920, 1080), "rounds": 3, "kinds": ["fast_gauss:1", "fast_gauss:4", "soften:1", "map_uv:1", "mix:4"]},
         {"size": kit.frame_size, "rounds": int, "kinds": lambda v: v.split(",")})
 
 
@@ -85,6 +87,10 @@ def _chain(tree, kind, count, frame, uv):
             tree.links.new(out, hn.input_socket(node, "map_uv", 0))
             tree.links.new(hn.output_socket(uv_node, "image", 0), hn.input_socket(node, "map_uv", 1))
             kind_out = "map_uv"
+        elif kind == "soften":  # the first blur level: a Filter node where the host runs it as one
+            node = hn.new_node(tree, "soften", {"sigma": 0.71})
+            tree.links.new(out, hn.input_socket(node, "soften", 0))
+            kind_out = "soften"
         elif kind == "mix":
             node = hn.new_node(tree, "mix", {"blend": "ADD"})
             hn.input_socket(node, "mix", 0).default_value = 1.0
@@ -92,7 +98,7 @@ def _chain(tree, kind, count, frame, uv):
             tree.links.new(hn.output_socket(source, "image", 0), hn.input_socket(node, "mix", 2))
             kind_out = "mix"
         else:
-            raise SystemExit(f"--kinds: unknown kind {kind!r} (fast_gauss, map_uv, mix)")
+            raise SystemExit(f"--kinds: unknown kind {kind!r} (fast_gauss, soften, map_uv, mix)")
         out = hn.output_socket(node, kind_out, 0)
     tree.links.new(out, hn.add_frame_output(tree, (600, 0)))
 
