@@ -282,11 +282,13 @@ def _math(operation: str, clamp: bool, defaults):
 
 # Node description: name -> (kind, options, {input index: default value}).
 # Kinds are abstract (image, map_uv, separate, combine, translate, mix, math,
-# switch, blur): host/nodes.py lowers each onto the node type and options of
-# the running Blender. Inputs are numbered as the kind defines them, whatever
-# the host calls its sockets: mix (factor, a, b), math (a, b, c), switch (off,
-# on), translate (image, x, y), map_uv (image, uv), blur (image),
-# combine (r, g, b, a); separate's outputs are (r, g, b, a).
+# switch, blur, soften): host/nodes.py lowers each onto the node type and
+# options of the running Blender (soften: the 3x3 Filter, or a Fast Gaussian of
+# its sigma, host/nodes.soften_is_a_filter). Inputs are numbered as the kind
+# defines them, whatever the host calls its sockets: mix (factor, a, b), math
+# (a, b, c), switch (off, on), translate (image, x, y), map_uv (image, uv),
+# blur (image), soften (image), combine (r, g, b, a); separate's outputs are
+# (r, g, b, a).
 GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "uv_image": ("image", {"image": IMAGE_UV}, {}),
     "weight_image": ("image", {"image": IMAGE_WEIGHT}, {}),
