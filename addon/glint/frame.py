@@ -338,10 +338,11 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
         # hidden sides, a pixel or two when there are none.
         if not frame.layers.get("hidden_pixels"):
             hidden = None
+        hidden_imgs, offset = compositing.hidden_images(hidden, region, cam.width, cam.height, placeable)
+        if hidden is None:
             # all zeros, and the same while the region keeps its size: written once
             # (on a compositor that cannot place them they are frame-sized)
-            keys[compositing.IMAGE_HIDDEN] = keys[compositing.IMAGE_HIDDEN_UV] = ("none", region, placeable)
-        hidden_imgs, offset = compositing.hidden_images(hidden, region, cam.width, cam.height, placeable)
+            keys.update((name, ("none", region, placeable)) for name in hidden_imgs)
     images = compositing.region_images(uv, weight, region, offset)
     images.update(hidden_imgs)
     frame.report.region = region

@@ -50,7 +50,7 @@ def test_blur_levels_hold_half_their_energy_in_the_cone_footprint():
         kind, props, defaults = cg.GROUP_NODES[f"blur_{j}"]
         if j == 1:  # the 3x3 binomial filter, whose variance per axis is its sigma^2, at lod 2
             taps = np.array([-1.0, 0.0, 1.0])
-            kernel = np.array(cg.SOFTEN_KERNEL) * 4.0
+            kernel = np.array(cg.SOFTEN_TAPS)
             assert kind == "soften" and kernel.sum() == 1.0
             assert float((kernel * taps * taps).sum()) == pytest.approx(sigma * sigma)
             rule = 2.0 ** lod / 4 / math.sqrt(2 * math.log(2))  # the sigma the rule asks at its lod

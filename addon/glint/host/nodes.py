@@ -238,9 +238,16 @@ _SOCKET_OUTPUTS = {"mix": {0: "Result_Color"}}
 _NAMED_INPUTS = {"soften": {0: "Image"}}
 
 
+def _lowered(kind: str) -> str:
+    """The kind a node is made as here: ``soften`` is a ``blur`` where the
+    host runs the first level as a Fast Gaussian (soften_is_a_filter)."""
+    return "blur" if kind == "soften" and not soften_is_a_filter() else kind
+
+
 def idname(kind: str) -> str:
+    kind = _lowered(kind)
     if kind == "soften":
-        return "CompositorNodeFilter" if soften_is_a_filter() else idname("blur")
+        return "CompositorNodeFilter"
     return _IDNAMES[kind][1 if options_are_sockets() else 0]
 
 
@@ -259,6 +266,7 @@ def _set_menu(node, socket: str, value: str) -> None:
 def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
     """A node of ``kind`` with the description's ``props`` applied."""
     sockets = options_are_sockets()
+    kind = _lowered(kind)
     node = tree.nodes.new(idname(kind))
     if kind == "image":
         node.image = image_of(props["image"])
@@ -278,7 +286,7 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
         node.use_clamp = bool(props.get("clamp", False))
     elif kind == "switch":
         set_switch(node, bool(props.get("on", False)))
-    elif kind == "blur" or (kind == "soften" and not soften_is_a_filter()):
+    elif kind == "blur":
         size = float(props["sigma"]) * fast_gauss_size_per_sigma()
         if sockets:
             _set_menu(node, "Type", "Fast Gaussian")
@@ -293,7 +301,7 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
                                ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
                 setattr(node, key, value)
             node.inputs[1].default_value = size / whole
-    elif kind == "soften":  # the Filter node (soften_is_a_filter)
+    elif kind == "soften":  # the Filter node
         # Soften is the Filter node's default type, at factor 1 (all filtered);
         # set anyway, so that a Blender whose default moved still softens.
         if sockets:

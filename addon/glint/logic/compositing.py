@@ -54,7 +54,8 @@ Soften filter, the others its Fast Gaussian, whose cost does not grow with its
 size), blended by lod the way the core's
 cone blur blends its mip levels: a pixel at lod l takes
 mix(..., mix(mix(D, B1, s1), B2, s2) ...), s_j = clamp((l - lod_{j-1}) /
-(lod_j - lod_{j-1}), 0, 1). A level j Gaussian holds half its energy within
+(lod_j - lod_{j-1}), 0, 1). A level j Gaussian (but the first, a 3x3 filter
+at lod 2: :data:`SOFTEN_LOD`) holds half its energy within
 a disc of diameter LEVEL_FOOTPRINT_SHARE x 2^lod_j, half the cone's footprint
 (``cone_tan``; why half: at :data:`LEVEL_FOOTPRINT_SHARE`): sigma = 2^lod /
 (4 sqrt(2 ln 2)). Blender's Fast Gaussian blurs with sigma = its size / 2
@@ -232,7 +233,7 @@ LEVEL_FOOTPRINT_SHARE = 0.5
 # scene is within 0.002 of the Fast Gaussian's figures and the metal sphere
 # closer (0.153, 0.192).
 SOFTEN_SIGMA = math.sqrt(0.5)
-SOFTEN_KERNEL = (1.0 / 16.0, 2.0 / 16.0, 1.0 / 16.0)  # per axis: (1 2 1) / 4, outer product
+SOFTEN_TAPS = (0.25, 0.5, 0.25)  # the kernel along each axis; the 3x3 kernel is their outer product
 # Blender's Filter node clamps its result at 0 (3.4 to 5.2 alike), and D is
 # negative wherever the reflection darkens the frame. The kernel sums to 1, so
 # it filters D + SOFTEN_LIFT and the lift is taken off again: exact while
@@ -240,8 +241,6 @@ SOFTEN_KERNEL = (1.0 / 16.0, 2.0 / 16.0, 1.0 / 16.0)  # per axis: (1 2 1) / 4, o
 # replaced), at a rounding of 2^-15 (3e-5, below an 8-bit step of the darkest
 # sRGB grey).
 SOFTEN_LIFT = 256.0
-
-
 SOFTEN_LOD = 2.0
 BLUR_LEVELS = ((SOFTEN_LOD, SOFTEN_SIGMA),) + tuple(
     (float(lod), HALF_ENERGY_SIGMA * LEVEL_FOOTPRINT_SHARE * 2.0 ** lod) for lod in (4, 6, 8))
@@ -254,8 +253,6 @@ COARSE = 4
 
 
 def _blur_node(sigma: float):
-    if sigma == SOFTEN_SIGMA:  # the sigma is for the hosts that run it as a Fast Gaussian
-        return ("soften", {"sigma": sigma}, {})
     return ("blur", {"sigma": sigma}, {})
 
 
@@ -368,7 +365,10 @@ GROUP_NODES.update({
 for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     _lo = BLUR_LEVELS[_j - 2][0] if _j > 1 else 0.0
     _coarse = _j > FULL_LEVELS
-    GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma / COARSE if _coarse else _sigma)
+    if _j == 1:  # the 3x3 filter; the sigma is for the hosts that run it as a Fast Gaussian
+        GROUP_NODES[f"blur_{_j}"] = ("soften", {"sigma": _sigma}, {})
+    else:
+        GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma / COARSE if _coarse else _sigma)
     # s_j = clamp(lod / (lod_j - lod_{j-1}) - lod_{j-1} / (lod_j - lod_{j-1}), 0, 1)
     _factor = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
     if GROUP_NODES[f"blur_{_j}"][0] == "soften":
@@ -466,6 +466,8 @@ for _t, (_kind, _props, _) in GROUP_NODES.items():
         GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
     else:
         GROUP_LINKS += [("offset_back_x", 0, _t, 1), ("offset_back_y", 0, _t, 2)]
+
+
 def _level_out(j: int) -> str:
     """The node whose output is blur level j."""
     return f"lift_out_{j}" if f"lift_out_{j}" in GROUP_NODES else f"blur_{j}"
@@ -830,10 +832,10 @@ def _canvas(values, frame_hw):
 
 def _softened(img: np.ndarray) -> np.ndarray:
     """Blender's Filter node, Soften, at factor 1: the 3x3 kernel
-    SOFTEN_KERNEL x SOFTEN_KERNEL^T on every channel, the edge texels repeated
+    SOFTEN_TAPS along each axis on every channel, the edge texels repeated
     past the canvas."""
     h, w = img.shape[:2]
-    k = [np.float32(4.0 * c) for c in SOFTEN_KERNEL]  # (1 2 1) / 4 per axis
+    k = [np.float32(c) for c in SOFTEN_TAPS]
     rows = sum(k[i] * img[np.clip(np.arange(h) + i - 1, 0, h - 1)] for i in range(3))
     return sum(k[i] * rows[:, np.clip(np.arange(w) + i - 1, 0, w - 1)] for i in range(3)).astype(np.float32)
 
