@@ -102,6 +102,11 @@ void hiz_plane_normals_row(const Image& position, const Image& normal, const See
 // `thickness`.
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes);
+// The same with the base level's rows eight texels at a time where `isa` is
+// the AVX2 walk's (hiz_base.h), the scalar rule otherwise: the same cells.
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads, HizPlanes& planes,
+                             WalkIsa isa);
 
 // The whole frame on the CPU, with the walk hiz_walk_default() picks: the
 // `cpu` entry of the march's row (march.cpp).

@@ -31,6 +31,7 @@
 #include "glint/schema.h"
 #include "glint/stages.h"
 #include "hiz.h"
+#include "hiz_base.h"
 #include "parallel.h"
 
 namespace glint::cpu {
@@ -463,6 +464,12 @@ HizCamera hiz_camera(const Mat4& projection) {
 
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes) {
+  return build_hiz_pyramid(position, normal, back_position, cam, thickness, threads, planes, hiz_walk_default());
+}
+
+HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
+                             const HizCamera& cam, float thickness, int threads, HizPlanes& planes,
+                             WalkIsa isa) {
   HizPyramid p;
   int w = position.width, h = position.height;
   size_t cells = 0;
@@ -491,7 +498,25 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     for (int y = y0; y < y1; ++y) {
       hiz_plane_normals_row(position, normal, seen, y, planes);
       float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
-      for (int x = 0; x < position.width; ++x)
+      int x = 0;
+#if defined(GLINT_WALK_AVX2)
+      if (isa == WalkIsa::Avx2) {
+        BaseRow r;
+        r.position = position.px(0, y);
+        r.planes = planes.px(0, y);
+        r.back = back_position ? back_position->px(0, y) : nullptr;
+        r.seen = seen.bytes.data() + static_cast<size_t>(y - seen.y0) * seen.width;
+        r.inv = cam.inv;
+        r.thickness = thickness;
+        r.footprint_spread = kFootprintSpread;
+        r.width = position.width;
+        r.height = position.height;
+        r.y = y;
+        r.out = row;
+        x = hiz_base_row_avx2(r);
+      }
+#endif
+      for (; x < position.width; ++x)
         base_range(position, planes, back_position, cam, thickness, seen.at(x, y), x, y, row + 2 * x);
     }
   });
@@ -695,7 +720,7 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
   const HizCamera cam = hiz_camera(in.projection);
   HizPlanes planes;
   const HizPyramid pyr =
-      build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads, planes);
+      build_hiz_pyramid(in.position, in.normal, in.back_position, cam, opt.thickness, threads, planes, isa);
   const MarchSetup setup = make_setup(in.position, in.normal, in.projection, opt, nullptr);
   // The walk's kernels index cells with ints (a 46k x 46k image would not fit).
   if (pyr.range.size() / 2 > static_cast<size_t>(std::numeric_limits<int>::max()))
