@@ -74,6 +74,15 @@ Image image_from_array(const pyb::handle& obj, const char* name, float fill_alph
   const float* src = contiguous.data();
   if (c == 4) {
     copy_floats(img.data.data(), src, img.data.size());
+  } else if (c == 3) {  // the usual normal buffer: a loop the compiler unrolls, not one per channel
+    const size_t n = img.pixel_count();
+    float* dst = img.data.data();
+    for (size_t i = 0; i < n; ++i) {
+      dst[i * 4] = src[i * 3];
+      dst[i * 4 + 1] = src[i * 3 + 1];
+      dst[i * 4 + 2] = src[i * 3 + 2];
+      dst[i * 4 + 3] = fill_alpha;
+    }
   } else {
     const size_t n = img.pixel_count();
     for (size_t i = 0; i < n; ++i) {
