@@ -7,7 +7,7 @@ warm-up):
   fast_gauss  Blur, Fast Gaussian (the group's blur levels; its cost does not grow with
               the size, so one size stands for all)
   soften      the group's first blur level as this Blender's host layer makes it: the
-              Filter node's 3x3 Soften after 4.1, a Fast Gaussian of sigma 0.71 before
+              Filter node's 3x3 Soften after 4.1, the Blur node's sampled Gaussian of sigma 0.71 before
   map_uv      Map UV with a smooth uv image hitting every pixel (the group's reflection
               and second bounce)
   mix         Mix, Add (the group's many per-pixel mixes)

@@ -30,7 +30,7 @@ LAYOUT_KEY = "glint_layout"
 # Blender whose nodes take their options otherwise) is rebuilt.
 LAYOUT_HASH = hashlib.sha1((repr(sorted(cg.GROUP_NODES.items())) + repr(cg.GROUP_LINKS) +
                             repr(cg.GROUP_OUTPUTS) + repr(host_nodes.options_are_sockets()) +
-                            repr(host_nodes.soften_is_a_filter())).encode()).hexdigest()[:12]
+                            host_nodes.lowered("soften")).encode()).hexdigest()[:12]
 
 
 # ----------------------------------------------------------------------------

@@ -516,7 +516,7 @@ def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
 
 
 def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sigma():
-    """Where the first level is a Fast Gaussian (host/nodes.soften_is_a_filter
+    """Where the first level is a Gaussian (host/nodes.soften_is_a_filter
     false) the lift's mixes pass D through and ``blur`` gets SOFTEN_SIGMA: with
     a ``blur`` that is the 3x3 kernel at that sigma, both hosts' groups agree."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()

@@ -2,9 +2,9 @@
 levels (the first the 3x3 Soften filter where the host runs it), the wide three
 on the coarse canvas (logic/compositing.py, "The coarse levels"), computed
 independently in numpy (tests/addon/compositing_reference.py) from the frame's
-own layers. Blender's Map UV filter and Fast Gaussian are not
-numpy's bilinear lookup and exact Gaussian, so this is a bound, not bit for
-bit; a coarse canvas placed or scaled wrongly misses it several times over."""
+own layers. Blender's Map UV filter and Gaussians are not numpy's bilinear
+lookup and exact Gaussian, so this is a bound, not bit for bit; a coarse
+canvas placed or scaled wrongly misses it several times over."""
 import os
 import sys
 
@@ -43,8 +43,8 @@ def test_the_compositor_blurs_as_the_formula_says(blender, samples, session_dir)
     err = {name: np.abs(R - want)[m].mean() / np.abs(want[m]).mean() for name, m in (("wide", wide), ("near", near))}
     print(f"\nBlender's blurred reflection against the formula, relative L1: lod > 4 {err['wide']:.3f} "
           f"({int(wide.sum())} pixels), lod <= 2 {err['near']:.3f} ({int(near.sum())} pixels)")
-    # at 480x270: 0.037 / 0.023 on 3.4 (its first level a Fast Gaussian against the
-    # reference's 3x3 filter), 0.038 / 0.010 on 4.3, 0.004 / 0.000 on 5.2; with a Soften
+    # at 480x270: 0.037 / 0.012 on 3.4 (its first level a sampled Gaussian of the 3x3
+    # filter's sigma against the reference's filter; 0.023 as a Fast Gaussian), 0.038 / 0.010 on 4.3, 0.004 / 0.000 on 5.2; with a Soften
     # filter left to clamp D at 0, 0.146 near on 3.4; on 3.4 the levels at 0.7x their sigma give 0.11,
     # Blender's frame moved by 2 pixels 0.07-0.09
     assert err["wide"] < 0.06 and err["near"] < 0.05

@@ -198,16 +198,25 @@ def fast_gauss_size_per_sigma() -> float:
 
 def soften_is_a_filter() -> bool:
     """Whether the group's first blur level (abstract kind ``soften``) is the
-    Filter node's 3x3 Soften here, or a Fast Gaussian of the same sigma. In the
-    group at 1920x1080 the filter made what Glint adds to a frame 0.9x on 4.3
-    and 5.2, and 1.08x on the Tiled-era compositor of 3.x-4.1
+    Filter node's 3x3 Soften here, or a sampled Gaussian of the same sigma (the
+    Blur node's Gaussian filter, not its Fast Gaussian). In the group at
+    1920x1080 the filter made what Glint adds to a frame 0.9x on 4.3 and 5.2,
+    and 1.08x on the Tiled-era compositor of 3.x-4.1
     (compositor_places_regions), whose filter reads its neighbours tile by
-    tile (docs/addon.md, *The first level as a 3x3 filter*)."""
+    tile; there the sampled Gaussian costs a fifth of the Fast Gaussian it
+    replaced (docs/addon.md, *The first level as a 3x3 filter*)."""
     return not compositor_places_regions()
 
 
+# The Tiled-era Blur node's Gaussian filter: taps exp(-i^2 / (2 (r / 3)^2))
+# for |i| <= ceil(r), r = size_x x the Size input, normalised over the taps
+# inside the canvas (so sigma = r / 3). Checked on an impulse on 3.4: the
+# sampled Gaussian of that sigma to five decimals, negative values kept.
+GAUSS_RADIUS_PER_SIGMA = 3.0
+
+
 def _blur_size(size: float) -> int:
-    # 3.4-4.5's Fast Gaussian takes an integer size that the Size input scales,
+    # 3.4-4.5's Blur node takes an integer size that the Size input scales,
     # which together give the exact size.
     return max(1, math.ceil(size))
 
@@ -238,16 +247,19 @@ _SOCKET_OUTPUTS = {"mix": {0: "Result_Color"}}
 _NAMED_INPUTS = {"soften": {0: "Image"}}
 
 
-def _lowered(kind: str) -> str:
-    """The kind a node is made as here: ``soften`` is a ``blur`` where the
-    host runs the first level as a Fast Gaussian (soften_is_a_filter)."""
-    return "blur" if kind == "soften" and not soften_is_a_filter() else kind
+def lowered(kind: str) -> str:
+    """The kind a node is made as here: ``soften`` is a ``gauss`` (the Blur
+    node's sampled Gaussian) where the host does not run the first level as
+    the Filter node (soften_is_a_filter)."""
+    return "gauss" if kind == "soften" and not soften_is_a_filter() else kind
 
 
 def idname(kind: str) -> str:
-    kind = _lowered(kind)
+    kind = lowered(kind)
     if kind == "soften":
         return "CompositorNodeFilter"
+    if kind == "gauss":
+        return _IDNAMES["blur"][0]
     return _IDNAMES[kind][1 if options_are_sockets() else 0]
 
 
@@ -266,7 +278,7 @@ def _set_menu(node, socket: str, value: str) -> None:
 def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
     """A node of ``kind`` with the description's ``props`` applied."""
     sockets = options_are_sockets()
-    kind = _lowered(kind)
+    kind = lowered(kind)
     node = tree.nodes.new(idname(kind))
     if kind == "image":
         node.image = image_of(props["image"])
@@ -301,6 +313,14 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
                                ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
                 setattr(node, key, value)
             node.inputs[1].default_value = size / whole
+    elif kind == "gauss":  # only lowered for the Tiled-era compositor, whose options are properties
+        radius = float(props["sigma"]) * GAUSS_RADIUS_PER_SIGMA
+        whole = _blur_size(radius)
+        for key, value in (("filter_type", "GAUSS"), ("use_relative", False), ("use_bokeh", False),
+                           ("use_gamma_correction", False), ("use_extended_bounds", False),
+                           ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
+            setattr(node, key, value)
+        node.inputs[1].default_value = radius / whole
     elif kind == "soften":  # the Filter node
         # Soften is the Filter node's default type, at factor 1 (all filtered);
         # set anyway, so that a Blender whose default moved still softens.

@@ -50,16 +50,17 @@ those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
 
 The blur: :data:`BLUR_LEVELS` Gaussian levels of D (the first Blender's 3x3
-Soften filter, the others its Fast Gaussian, whose cost does not grow with its
-size), blended by lod the way the core's
+Soften filter after 4.1 and its Blur node's sampled Gaussian before, both of
+which cost less there than the others, its Fast Gaussian, whose cost does not
+grow with its size: host/nodes.py), blended by lod the way the core's
 cone blur blends its mip levels: a pixel at lod l takes
 mix(..., mix(mix(D, B1, s1), B2, s2) ...), s_j = clamp((l - lod_{j-1}) /
 (lod_j - lod_{j-1}), 0, 1). A level j Gaussian (but the first, a 3x3 filter
 at lod 2: :data:`SOFTEN_LOD`) holds half its energy within
 a disc of diameter LEVEL_FOOTPRINT_SHARE x 2^lod_j, half the cone's footprint
 (``cone_tan``; why half: at :data:`LEVEL_FOOTPRINT_SHARE`): sigma = 2^lod /
-(4 sqrt(2 ln 2)). Blender's Fast Gaussian blurs with sigma = its size / 2
-(host/nodes.py). Blurring D rather than C
+(4 sqrt(2 ln 2)). Blender's Fast Gaussian blurs with sigma = its size / 2 or
+/ 3, its sampled Gaussian with sigma = its radius / 3 (host/nodes.py). Blurring D rather than C
 weights each neighbour by its own W and S, which vary slowly over a rough
 surface. A frame with no rough reflective surface switches the levels off
 (``use_blur``): the compositor then does not run them at all.
@@ -280,8 +281,8 @@ def _math(operation: str, clamp: bool, defaults):
 # Node description: name -> (kind, options, {input index: default value}).
 # Kinds are abstract (image, map_uv, separate, combine, translate, mix, math,
 # switch, blur, soften): host/nodes.py lowers each onto the node type and
-# options of the running Blender (soften: the 3x3 Filter, or a Fast Gaussian of
-# its sigma, host/nodes.soften_is_a_filter). Inputs are numbered as the kind
+# options of the running Blender (soften: the 3x3 Filter, or a sampled Gaussian
+# of its sigma, host/nodes.soften_is_a_filter). Inputs are numbered as the kind
 # defines them, whatever the host calls its sockets: mix (factor, a, b), math
 # (a, b, c), switch (off, on), translate (image, x, y), map_uv (image, uv),
 # blur (image), soften (image), combine (r, g, b, a); separate's outputs are
@@ -365,7 +366,7 @@ GROUP_NODES.update({
 for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     _lo = BLUR_LEVELS[_j - 2][0] if _j > 1 else 0.0
     _coarse = _j > FULL_LEVELS
-    if _j == 1:  # the 3x3 filter; the sigma is for the hosts that run it as a Fast Gaussian
+    if _j == 1:  # the 3x3 filter; the sigma is for the hosts that run it as a Gaussian
         GROUP_NODES[f"blur_{_j}"] = ("soften", {"sigma": _sigma}, {})
     else:
         GROUP_NODES[f"blur_{_j}"] = _blur_node(_sigma / COARSE if _coarse else _sigma)
@@ -373,8 +374,8 @@ for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     _factor = _math("MULTIPLY_ADD", True, {1: 1.0 / (_lod - _lo), 2: -_lo / (_lod - _lo)})
     if GROUP_NODES[f"blur_{_j}"][0] == "soften":
         # D + lift through the filter, minus lift; the Switches take the lift's
-        # mixes out where the host runs the level as a Fast Gaussian, which
-        # does not clamp (and, at the canvas's edge, would not keep a constant).
+        # mixes out where the host runs the level as a Gaussian, which does not
+        # clamp (and, at the canvas's edge, would not keep a constant).
         _lift = (SOFTEN_LIFT, SOFTEN_LIFT, SOFTEN_LIFT, 1.0)
         GROUP_NODES[f"lift_{_j}"] = _mix("ADD", {0: 1.0, 2: _lift})
         GROUP_NODES[f"drop_{_j}"] = _mix("SUBTRACT", {0: 1.0, 2: _lift})
