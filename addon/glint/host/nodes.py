@@ -221,6 +221,17 @@ def _blur_size(size: float) -> int:
     return max(1, math.ceil(size))
 
 
+def _set_blur_properties(node, filter_type: str, size: float) -> None:
+    """A Blur node of 3.4-4.5 (options as properties) set to `filter_type` at
+    `size` pixels: the integer size, scaled to the exact one by the Size input."""
+    whole = _blur_size(size)
+    for key, value in (("filter_type", filter_type), ("use_relative", False), ("use_bokeh", False),
+                       ("use_gamma_correction", False), ("use_extended_bounds", False),
+                       ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
+        setattr(node, key, value)
+    node.inputs[1].default_value = size / whole
+
+
 # kind -> (idname up to 4.5, idname from 5.0)
 _IDNAMES = {
     "image": ("CompositorNodeImage", "CompositorNodeImage"),
@@ -307,20 +318,9 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
                 if name in node.inputs:
                     node.inputs[name].default_value = False
         else:
-            whole = _blur_size(size)
-            for key, value in (("filter_type", "FAST_GAUSS"), ("use_relative", False), ("use_bokeh", False),
-                               ("use_gamma_correction", False), ("use_extended_bounds", False),
-                               ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
-                setattr(node, key, value)
-            node.inputs[1].default_value = size / whole
+            _set_blur_properties(node, "FAST_GAUSS", size)
     elif kind == "gauss":  # only lowered for the Tiled-era compositor, whose options are properties
-        radius = float(props["sigma"]) * GAUSS_RADIUS_PER_SIGMA
-        whole = _blur_size(radius)
-        for key, value in (("filter_type", "GAUSS"), ("use_relative", False), ("use_bokeh", False),
-                           ("use_gamma_correction", False), ("use_extended_bounds", False),
-                           ("use_variable_size", False), ("size_x", whole), ("size_y", whole)):
-            setattr(node, key, value)
-        node.inputs[1].default_value = radius / whole
+        _set_blur_properties(node, "GAUSS", float(props["sigma"]) * GAUSS_RADIUS_PER_SIGMA)
     elif kind == "soften":  # the Filter node
         # Soften is the Filter node's default type, at factor 1 (all filtered);
         # set anyway, so that a Blender whose default moved still softens.
