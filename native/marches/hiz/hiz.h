@@ -99,11 +99,8 @@ void hiz_plane_normals_row(const Image& position, const Image& normal, const See
 // then the same row of the base while the row is in the cache. `normal` is
 // the shading normal. Per-texel thickness: back_position's view distance
 // minus the front's where a back surface is known and behind, else
-// `thickness`.
-HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
-                             const HizCamera& cam, float thickness, int threads, HizPlanes& planes);
-// The same with the base level's rows eight texels at a time where `isa` is
-// the AVX2 walk's (hiz_base.h), the scalar rule otherwise: the same cells.
+// `thickness`. The base level's rows go eight texels at a time where `isa` is
+// the AVX2 walk's (hiz_base.h), by the scalar rule otherwise: the same cells.
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes,
                              WalkIsa isa);

@@ -463,11 +463,6 @@ HizCamera hiz_camera(const Mat4& projection) {
 }
 
 HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
-                             const HizCamera& cam, float thickness, int threads, HizPlanes& planes) {
-  return build_hiz_pyramid(position, normal, back_position, cam, thickness, threads, planes, hiz_walk_default());
-}
-
-HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const Image* back_position,
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes,
                              WalkIsa isa) {
   HizPyramid p;
