@@ -11,6 +11,11 @@ warm-up):
   map_uv      Map UV with a smooth uv image hitting every pixel (the group's reflection
               and second bounce)
   mix         Mix, Add (the group's many per-pixel mixes)
+  read_back   the coarse levels' read-back of a canvas of one texel per 4x4 pixels, added
+              to the frame: a Map UV reading it at the fine image's uv (the group's
+              path after 4.1), with the Mix that adds it
+  scale_back  the same read-back as a Blur of a tenth of a pixel and a Scale to the
+              frame's size (the group's path on 3.x-4.1), with the Mix
 
   blender -b --factory-startup -noaudio --python bench/compositor_nodes.py -- \
       [--size 1920x1080] [--rounds 3] [--kinds fast_gauss:1,fast_gauss:4,soften:1,map_uv:1,mix:4]
@@ -60,6 +65,12 @@ def _scene(size):
     w, h = size
     rng = np.random.default_rng(1)
     frame = _image("bench frame", rng.random((h, w, 4)))
+    cw, ch = w // 4 + 1, h // 4 + 1  # logic/compositing.coarse_size
+    _image("bench coarse", rng.random((ch, cw, 4)))
+    fine = np.ones((h, w, 4), np.float32)
+    fine[..., 0] = ((np.arange(w) * (cw / w) + 0.5) / cw)[None, :]
+    fine[..., 1] = ((np.arange(h) * (ch / h) + 0.5) / ch)[:, None]
+    _image("bench fine", fine)
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     uv = np.ones((h, w, 4), np.float32)
     uv[..., 0] = (xx + 0.5) / w  # a smooth uv: Map UV's filter footprint stays a pixel
@@ -73,7 +84,8 @@ def _chain(tree, kind, count, frame, uv):
     hn = host.nodes
     for node in list(tree.nodes):
         tree.nodes.remove(node)
-    images = {"frame": frame, "uv": uv}
+    images = {"frame": frame, "uv": uv, "coarse": bpy.data.images["bench coarse"],
+              "fine": bpy.data.images["bench fine"]}
     source = hn.new_node(tree, "image", {"image": "frame"}, images.get)
     out = hn.output_socket(source, "image", 0)
     for _ in range(count):
@@ -91,16 +103,37 @@ def _chain(tree, kind, count, frame, uv):
             node = hn.new_node(tree, "soften", {"sigma": 0.71})
             tree.links.new(out, hn.input_socket(node, "soften", 0))
             kind_out = "soften"
-        elif kind == "mix":
+        elif kind in ("mix", "read_back", "scale_back"):
+            added = hn.output_socket(source, "image", 0)
+            if kind != "mix":
+                coarse = hn.output_socket(hn.new_node(tree, "image", {"image": "coarse"}, images.get), "image", 0)
+                added = _read_back(tree, kind, coarse, images)
             node = hn.new_node(tree, "mix", {"blend": "ADD"})
             hn.input_socket(node, "mix", 0).default_value = 1.0
             tree.links.new(out, hn.input_socket(node, "mix", 1))
-            tree.links.new(hn.output_socket(source, "image", 0), hn.input_socket(node, "mix", 2))
+            tree.links.new(added, hn.input_socket(node, "mix", 2))
             kind_out = "mix"
         else:
-            raise SystemExit(f"--kinds: unknown kind {kind!r} (fast_gauss, soften, map_uv, mix)")
+            raise SystemExit(f"--kinds: unknown kind {kind!r} "
+                             "(fast_gauss, soften, map_uv, mix, read_back, scale_back)")
         out = hn.output_socket(node, kind_out, 0)
     tree.links.new(out, hn.add_frame_output(tree, (600, 0)))
+
+
+def _read_back(tree, kind, coarse, images):
+    """The coarse canvas brought to the frame's size as the group's two paths do it."""
+    hn = host.nodes
+    if kind == "read_back":
+        fine = hn.new_node(tree, "image", {"image": "fine"}, images.get)
+        node = hn.new_node(tree, "map_uv", {})
+        tree.links.new(coarse, hn.input_socket(node, "map_uv", 0))
+        tree.links.new(hn.output_socket(fine, "image", 0), hn.input_socket(node, "map_uv", 1))
+        return hn.output_socket(node, "map_uv", 0)
+    kept = hn.new_node(tree, "keep", {})
+    tree.links.new(coarse, hn.input_socket(kept, "keep", 0))
+    node = hn.new_node(tree, "frame_scale", {})
+    tree.links.new(hn.output_socket(kept, "keep", 0), hn.input_socket(node, "frame_scale", 0))
+    return hn.output_socket(node, "frame_scale", 0)
 
 
 def main():

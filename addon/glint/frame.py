@@ -330,7 +330,7 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
         region = (0, 0, cam.width, cam.height)
     else:
         region = compositing.image_region(uv[..., 3], weight[..., 3])
-    keys = {compositing.IMAGE_FINE: region}
+    keys = {compositing.IMAGE_FINE: (region, cam.width, cam.height)}
     offset = (0.0, 0.0)
     hidden_imgs = {}
     if settings_logic.shows_hidden_sides(frame.values):
@@ -343,7 +343,9 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
             # all zeros, and the same while the region keeps its size: written once
             # (on a compositor that cannot place them they are frame-sized)
             keys.update((name, ("none", region, placeable)) for name in hidden_imgs)
-    images = compositing.region_images(uv, weight, region, offset)
+    # where regions are placed the coarse canvas comes back through a Scale,
+    # not the fine image (compositing.switch_states)
+    images = compositing.region_images(uv, weight, region, offset, fine=not placeable)
     images.update(hidden_imgs)
     frame.report.region = region
     if view in compositing.GBUFFER_DEBUG_VIEWS:

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from compositing_reference import bilinear_clamp, blurred_at_lod, gauss_clamp
+from compositing_reference import bilinear_clamp, bilinear_zero, blurred_at_lod, gauss_clamp
 from glint_addon_helpers import load_logic
 
 cg = load_logic("compositing")
@@ -15,7 +15,7 @@ texels = load_logic("texels")
 # The abstract kinds' inputs and outputs as the description numbers them
 # (host/nodes.py maps them onto each Blender's sockets).
 INPUTS = {"math": 3, "mix": 3, "separate": 1, "combine": 4, "map_uv": 2, "blur": 1, "soften": 1,
-          "switch": 2, "image": 0, "translate": 3}
+          "switch": 2, "image": 0, "translate": 3, "frame_scale": 1, "keep": 1}
 OUTPUTS = {"separate": 4, "image": 2}
 # float32 against the float64 formula, plus the first level's lift through the
 # 3x3 filter (compositing.SOFTEN_LIFT): D rounded to that float's spacing,
@@ -78,12 +78,13 @@ def test_the_soften_level_is_the_3x3_binomial_kernel():
 
 # -- an independent reference of the composite (sampling and blur: compositing_reference.py)
 
-def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidden=None):
+def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidden=None, past_edge="zero"):
     """out = base + R, R = D at the pixel's lod between Gaussian levels of D,
     D = C W - rep S: written from the formula, not from the node list. With
     ``bounce``, C is sampled from the frame with its first bounce, base + D.
     ``hidden`` (albedo, vis): those pixels (vis 0 in ``uv``) show albedo x the
-    frame at the pixel, times their vis, and replace that share of S."""
+    frame at the pixel, times their vis, and replace that share of S.
+    ``past_edge``: how the coarse levels are read back (blurred_at_lod)."""
     vis = uv[..., 2:3]
     rep = vis if hidden is None else vis + hidden[..., 3:4]
     own = 0.0 if hidden is None else hidden[..., :3] * hidden[..., 3:4] * base[..., :3]
@@ -94,7 +95,7 @@ def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidd
         first[..., :3] += D
         C = np.where(vis > 0, bilinear_clamp(first, uv[..., 0], uv[..., 1]) * vis, 0.0)
         D = (C[..., :3] + own) * weight[..., :3] - rep * (light[..., :3] * colour[..., :3])
-    R = blurred_at_lod(D, lod)
+    R = blurred_at_lod(D, lod, past_edge=past_edge)
     out = base.copy()
     out[..., :3] += R
     return out, R
@@ -152,7 +153,7 @@ def images_of(base, position, spec, uv, weight, lod, debug=None, hidden=None):
             cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden, cg.IMAGE_HIDDEN_UV: own,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
             cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec,
-            **cg.coarse_images(lod, (0, 0, wd, h))}
+            **cg.coarse_images(lod, (0, 0, wd, h), wd, h)}
 
 
 @pytest.mark.parametrize("engine_passes", [True, False])
@@ -203,13 +204,16 @@ def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bou
         kw = dict(specular_light=light, specular_color=colour)
     kw["whole_frame"] = whole_frame
     out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
-    want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden)
+    edge = "clamp" if whole_frame else "zero"  # the fine image's Map UV, or the Scale
+    want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden,
+                                  past_edge=edge)
     assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
     # switched off, the hidden image is not read: the pixels only lose S
     off = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, **kw)
     hidden_off = hidden.copy()
     hidden_off[..., :3] = 0
-    want_off, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden_off)
+    want_off, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden_off,
+                                      past_edge=edge)
     assert np.allclose(off["Image"][..., :3], want_off[..., :3], atol=ATOL)
 
 
@@ -346,7 +350,8 @@ def test_debug_switches():
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
                                                "use_bounce": False, "use_passes": True, "use_hidden": False,
-                                               "hidden_at_pixel": False, "lift_in_1": True, "lift_out_1": True}
+                                               "hidden_at_pixel": False, "lift_in_1": True, "lift_out_1": True,
+                                               "coarse_by_scale": True}
     assert cg.switch_states("NONE", whole_frame=True)["hidden_at_pixel"]
     assert not any(cg.switch_states("NONE", soften_filters=False)[name] for name in ("lift_in_1", "lift_out_1"))
 
@@ -533,3 +538,29 @@ def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sig
     assert sigmas.count(cg.SOFTEN_SIGMA) == 1 and len(sigmas) == len(cg.BLUR_LEVELS)
     assert np.abs(filt["Reflection"]).max() > 0.01
     assert np.allclose(filt["Image"], gauss["Image"], atol=ATOL)
+
+
+@pytest.mark.parametrize("hw", [(12, 16), (50, 66), (1, 1)])
+def test_the_coarse_canvas_comes_back_as_blenders_scale_reads_it(hw):
+    """frame_scale's model against the read written out (3.4's Scale to the
+    render size: texel x n / W at pixel x, 0 past the canvas; checked on Blender
+    3.4 at 64x36 and 66x50 to 1e-6), on frames whose size is not whole texels,
+    and the coarse canvas's texels on the frame's grid whatever the region."""
+    h, w = hw
+    cw, ch = cg.coarse_size(w, h)
+    img = np.random.default_rng(4).uniform(-1, 1, (ch, cw, 4)).astype(np.float32)
+    x = (np.arange(w) * (cw / w))[None, :] * np.ones((h, 1))
+    y = (np.arange(h) * (ch / h))[:, None] * np.ones((1, w))
+    assert np.allclose(cg._scaled_to_frame(img, (h, w)), bilinear_zero(img, x, y), atol=1e-6)
+    lod = np.random.default_rng(5).uniform(-1, 9, (h, w)).astype(np.float32)
+    whole = cg.coarse_images(lod, (0, 0, w, h), w, h)
+    if w > 4:
+        region = (3, 2, w - 5, h - 1)
+        cut = np.zeros_like(lod)
+        cut[2:h - 1, 3:w - 5] = lod[2:h - 1, 3:w - 5]
+        part = cg.coarse_images(lod[2:h - 1, 3:w - 5], region, w, h, fine=False)
+        assert cg.IMAGE_FINE not in part
+        same = cg.coarse_images(cut, (0, 0, w, h), w, h)[cg.IMAGE_COARSE]
+        assert np.allclose(part[cg.IMAGE_COARSE][..., 3], same[..., 3])
+    fine = whole[cg.IMAGE_FINE]  # the Map UV read-back: the same points as the Scale's
+    assert np.allclose(fine[..., 0] * cw - 0.5, x) and np.allclose(fine[..., 1] * ch - 0.5, y)

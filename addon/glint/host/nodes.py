@@ -22,7 +22,7 @@ exist), so a Blender between the tested ones takes whichever form it has.
 from __future__ import annotations
 
 import math
-from typing import Dict, Optional, Tuple
+from typing import Dict, Tuple
 
 import bpy
 
@@ -244,7 +244,14 @@ _IDNAMES = {
     "switch": ("CompositorNodeSwitch", "CompositorNodeSwitch"),
     "blur": ("CompositorNodeBlur", "CompositorNodeBlur"),
     "rgb": ("CompositorNodeRGB", "CompositorNodeRGB"),
+    "frame_scale": ("CompositorNodeScale", "CompositorNodeScale"),
+    "keep": ("CompositorNodeBlur", "CompositorNodeBlur"),
 }
+# keep: a Gaussian Blur this many pixels wide, whose taps off the centre are
+# exp(-450) = 0 in float: the image unchanged, but made once into a buffer by
+# the Tiled compositor, which evaluates a chain of simple operations anew for
+# every read of a node that samples it (a Scale reads four texels per pixel).
+KEEP_RADIUS = 0.1
 
 # Sockets whose index moved: kind -> {abstract index: socket identifier}, 5.0+.
 _SOCKET_INPUTS = {
@@ -272,12 +279,6 @@ def idname(kind: str) -> str:
     if kind == "gauss":
         return _IDNAMES["blur"][0]
     return _IDNAMES[kind][1 if options_are_sockets() else 0]
-
-
-def kind_of(node) -> Optional[str]:
-    """The abstract kind of a node Glint made, from its type."""
-    sockets = options_are_sockets()
-    return next((k for k, ids in _IDNAMES.items() if ids[1 if sockets else 0] == node.bl_idname), None)
 
 
 def _set_menu(node, socket: str, value: str) -> None:
@@ -341,6 +342,23 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
             node.wrap_axis = "NONE"
             if hasattr(node, "interpolation"):
                 node.interpolation = "Nearest"
+    elif kind == "keep":
+        if sockets:
+            _set_menu(node, "Type", "Gaussian")
+            node.inputs["Size"].default_value = (KEEP_RADIUS, KEEP_RADIUS)
+        else:
+            _set_blur_properties(node, "GAUSS", KEEP_RADIUS)
+    elif kind == "frame_scale":
+        # To the frame's size, bilinear: on 3.4 pixel x reads texel x n / W,
+        # texel centres on whole numbers, 0 past the last (logic/compositing's
+        # numpy model; checked on random images of 64x36 and 66x50).
+        if sockets:
+            _set_menu(node, "Type", "Render Size")
+            _set_menu(node, "Frame Type", "Stretch")
+            _set_menu(node, "Interpolation", "Bilinear")
+        else:
+            node.space = "RENDER_SIZE"
+            node.frame_method = "STRETCH"
     elif kind == "map_uv":
         if not sockets:
             node.alpha = 0  # no fading by uv derivatives: Map UV only premultiplies by vis

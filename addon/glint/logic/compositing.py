@@ -69,16 +69,24 @@ The coarse levels: a Fast Gaussian costs the same per pixel whatever its
 sigma, and the wide levels (sigma 3.4, 14 and 54 pixels) hold nothing finer
 than a few pixels. So only the first level (sigma 0.71, the 3x3 filter) blurs the region's
 pixels; the others blur a canvas with one texel per COARSE x COARSE block,
-1/16 of the pixels. Map UV makes it: the coarse image's uv puts each texel at
-its block's centre, and Map UV's filter, which sizes itself by how far the uv
-moves between neighbouring texels, averages the block. The levels are mixed
-there as above, by the mean lod of the block's blurred pixels, and a second
-Map UV reads that mix back at each pixel (the fine image's uv). Since the
-mixing weights rise in order (s_j > 0 only where s_{j-1} = 1), the chain
+1/16 of the pixels, over the whole frame (coarse_size). Map UV makes it: the
+coarse image's uv puts texel (i, j) at the frame's pixel (i W / cw, j H / ch),
+and Map UV's filter, which sizes itself by how far the uv moves between
+neighbouring texels, averages the pixels around it. The levels are mixed
+there as above, by the mean lod of the blurred pixels nearest each texel, and
+that mix is read back at each pixel at texel coordinates (x cw / W, y ch / H):
+where the compositor places regions (3.x-4.1) by a Scale to the frame's size
+(bilinear, a tenth of a Map UV's cost there; a Blur of a tenth of a pixel
+before it, ``keep``, makes the mix once instead of once per texel read), and
+moved into the region; elsewhere by a second Map UV (the fine image's uv).
+Past the last texel the Scale blends with 0: the wide levels fade over the
+last 4 pixels of the frame's right and top edges. Since the mixing weights
+rise in order (s_j > 0 only where s_{j-1} = 1), the chain
 mix(mix(mix(D, B1, s1), B2, s2), ...) equals mix(mix(D, B1, s1), Q, s2) with Q
-the coarse mix of B2..B4: exact up to the block's lod standing for its pixels'.
-The blocks lie on the frame's grid, so a region's coarse canvas is part of the
-frame's. Measured in docs/addon.md (*The coarse levels*).
+the coarse mix of B2..B4: exact up to a texel's lod standing for its pixels'.
+The texels lie on the frame's grid, so a region reads the same canvas as the
+whole frame. Measured in docs/addon.md (*The coarse levels*, *The coarse
+levels read back by a Scale*).
 
 Hidden sides: a ray that comes into an object by the side the camera does not
 see (a floor's ray meeting a sphere's underside) has no pixel of the frame to
@@ -281,13 +289,15 @@ def _math(operation: str, clamp: bool, defaults):
 
 # Node description: name -> (kind, options, {input index: default value}).
 # Kinds are abstract (image, map_uv, separate, combine, translate, mix, math,
-# switch, blur, soften): host/nodes.py lowers each onto the node type and
-# options of the running Blender (soften: the 3x3 Filter, or a sampled Gaussian
-# of its sigma, host/nodes.soften_is_a_filter). Inputs are numbered as the kind
-# defines them, whatever the host calls its sockets: mix (factor, a, b), math
-# (a, b, c), switch (off, on), translate (image, x, y), map_uv (image, uv),
-# blur (image), soften (image), combine (r, g, b, a); separate's outputs are
-# (r, g, b, a).
+# switch, blur, soften, frame_scale, keep): host/nodes.py lowers each onto the
+# node type and options of the running Blender (soften: the 3x3 Filter, or a
+# sampled Gaussian of its sigma, host/nodes.soften_is_a_filter; frame_scale:
+# the Scale node to the render size, stretched; keep: the image unchanged, made
+# once, host/nodes.KEEP_RADIUS). Inputs are numbered as the kind defines them,
+# whatever the host calls its sockets: mix (factor, a, b), math (a, b, c),
+# switch (off, on), translate (image, x, y), map_uv (image, uv), blur (image),
+# soften (image), frame_scale (image), keep (image), combine (r, g, b, a);
+# separate's outputs are (r, g, b, a).
 GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "uv_image": ("image", {"image": IMAGE_UV}, {}),
     "weight_image": ("image", {"image": IMAGE_WEIGHT}, {}),
@@ -363,6 +373,14 @@ GROUP_NODES.update({
     "sep_coarse": _separate(),  # the coarse image's alpha: the coarse texel's lod
     "to_coarse": ("map_uv", {}, {}),
     "from_coarse": ("map_uv", {}, {}),
+    # The read-back where the compositor places regions (3.x-4.1): the coarse
+    # canvas stretched to the frame (a bilinear read per pixel, a tenth of a
+    # Map UV's cost there), then the frame's region taken out; the fine image
+    # is then not read (switch_states()).
+    "coarse_kept": ("keep", {}, {}),
+    "coarse_to_frame": ("frame_scale", {}, {}),
+    "coarse_to_region": _translate(-1),
+    "coarse_by_scale": ("switch", {"on": False}, {}),
 })
 for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
     _lo = BLUR_LEVELS[_j - 2][0] if _j > 1 else 0.0
@@ -497,7 +515,7 @@ for _j in range(1, len(BLUR_LEVELS) + 1):
             ("sep_weight", 3, f"level_{_j}", 0),
             (f"level_{_j}", 0, f"mix_{_j}", 0),
             (_below, 0, f"mix_{_j}", 1),
-            ("from_coarse" if _j == FIRST_COARSE else _level_out(_j), 0, f"mix_{_j}", 2),
+            ("coarse_by_scale" if _j == FIRST_COARSE else _level_out(_j), 0, f"mix_{_j}", 2),
         ]
     else:
         _below = _level_out(_j - 1) if _j == FIRST_COARSE + 1 else f"coarse_mix_{_j - 1}"
@@ -508,7 +526,16 @@ for _j in range(1, len(BLUR_LEVELS) + 1):
             (_level_out(_j), 0, f"coarse_mix_{_j}", 2),
         ]
 _last = len(BLUR_LEVELS)
-GROUP_LINKS.append((f"coarse_mix_{_last}" if _last > FIRST_COARSE else _level_out(_last), 0, "from_coarse", 0))
+_coarse_out = f"coarse_mix_{_last}" if _last > FIRST_COARSE else _level_out(_last)
+GROUP_LINKS += [
+    (_coarse_out, 0, "from_coarse", 0),
+    (_coarse_out, 0, "coarse_kept", 0),
+    ("coarse_kept", 0, "coarse_to_frame", 0),
+    ("coarse_to_frame", 0, "coarse_to_region", 0),  # moved by minus the offset (above)
+    # input 0 when off: the fine image's Map UV
+    ("from_coarse", 0, "coarse_by_scale", 0),
+    ("coarse_to_region", 0, "coarse_by_scale", 1),
+]
 GROUP_LINKS += [
     # the Switch takes input 0 when off: the unblurred D2, levels not run
     ("use_bounce", 0, "use_blur", 0),
@@ -558,10 +585,12 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     (``soften_filters``: host/nodes.soften_is_a_filter), and whether the group
     works on the whole frame (``whole_frame``: a compositor that cannot place a
     region, host/nodes.compositor_places_regions), where a hidden side's
-    light is the frame at the pixel as it is."""
+    light is the frame at the pixel as it is and the coarse levels come back
+    through the fine image's Map UV (elsewhere, through ``frame_scale``)."""
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
-              "use_hidden": bool(use_hidden), "hidden_at_pixel": bool(whole_frame)}
+              "use_hidden": bool(use_hidden), "hidden_at_pixel": bool(whole_frame),
+              "coarse_by_scale": not whole_frame}
     states.update((name, bool(soften_filters)) for name in SOFTEN_LIFT_SWITCHES)
     return states
 
@@ -706,69 +735,94 @@ def hidden_images(hidden: Optional[np.ndarray], region: Tuple[int, int, int, int
 
 
 def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int],
-                  hidden_offset: Tuple[float, float] = (0.0, 0.0)) -> Dict[str, np.ndarray]:
+                  hidden_offset: Tuple[float, float] = (0.0, 0.0), fine: bool = True) -> Dict[str, np.ndarray]:
     """The uv and weight images cut to ``region`` (views, not copies), the 1x1
     offset image that places them (:data:`IMAGE_OFFSET`: dx, dy and the hidden
     box's offset in the region, :func:`hidden_images`) and the coarse levels'
-    two images (:func:`coarse_images`)."""
+    images (:func:`coarse_images`; ``fine``: the group reads the coarse canvas
+    back through the fine image, on a compositor that cannot place a region)."""
     x0, y0, x1, y1 = region
     h, w = np.shape(uv)[:2]
     dx, dy = region_offset(region, w, h)
     images = {IMAGE_UV: uv[y0:y1, x0:x1], IMAGE_WEIGHT: weight[y0:y1, x0:x1],
               IMAGE_OFFSET: np.array([[[dx, dy, hidden_offset[0], hidden_offset[1]]]], np.float32)}
-    images.update(coarse_images(weight[y0:y1, x0:x1, 3], region))
+    images.update(coarse_images(weight[y0:y1, x0:x1, 3], region, w, h, fine))
     return images
 
 
-def _blocks(lo: int, hi: int) -> Tuple[int, int]:
-    """The coarse texels [first, last) whose blocks of the frame meet pixels [lo, hi)."""
-    return lo // COARSE, -(-hi // COARSE)
+def coarse_size(width: int, height: int) -> Tuple[int, int]:
+    """The coarse canvas's texels across and up: one per COARSE pixels of the
+    frame and one more, so that texel i sits at pixel i x width / across, where
+    ``frame_scale`` reads it (Blender's Scale to the render size reads texel
+    x x across / width at pixel x; past the last texel it blends with 0)."""
+    return width // COARSE + 1, height // COARSE + 1
 
 
-def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int]) -> Dict[str, np.ndarray]:
-    """The coarse canvas's images for a region whose pixels have ``lod``:
+def _nearest_texels(lo: int, hi: int, size: int, n: int) -> np.ndarray:
+    """For the pixels [lo, hi) of a frame axis of ``size`` pixels, the coarse
+    texel (of ``n``) each one's read lies nearest."""
+    return np.minimum(np.floor(np.arange(lo, hi) * (n / size) + 0.5).astype(np.int64), n - 1)
 
-    * :data:`IMAGE_COARSE`, one texel per COARSE x COARSE block of the frame's
-      pixels that meets the region: (u, v) the block's centre in the region's uv
-      (where Map UV reads D2), 1 (Map UV's vis), and the mean lod of the block's
-      blurred pixels (lod > 0; 0 where it has none), which mixes the levels there;
-    * :data:`IMAGE_FINE`, region-sized: (u, v) of each pixel's centre on the
-      coarse canvas, 1, 1: where the mix of the wide levels is read back.
 
-    Blocks sit on the frame's grid, not the region's, so a region sees the same
-    blocks as the whole frame does."""
+def _texel_sums(values: np.ndarray, texel: np.ndarray, n: int, axis: int) -> np.ndarray:
+    """``values`` summed along ``axis`` over the runs of pixels of one texel
+    (``texel`` does not decrease), placed at those texels of ``n``."""
+    starts = np.flatnonzero(np.r_[True, texel[1:] != texel[:-1]])
+    sums = np.add.reduceat(values, starts, axis=axis)
+    shape = list(values.shape)
+    shape[axis] = n
+    out = np.zeros(shape, sums.dtype)
+    index = [slice(None)] * values.ndim
+    index[axis] = texel[starts]
+    out[tuple(index)] = sums
+    return out
+
+
+def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int, height: int,
+                  fine: bool = True) -> Dict[str, np.ndarray]:
+    """The coarse canvas's images for a region of a ``width`` x ``height``
+    frame whose pixels have ``lod``. The canvas covers the frame
+    (:func:`coarse_size`), texel (i, j) at the frame's pixel (i W / cw, j H / ch):
+
+    * :data:`IMAGE_COARSE`: (u, v) of that point in the region's uv (where Map
+      UV reads D2; its filter, sized by the texels' spacing, averages the
+      pixels around it), 1 (Map UV's vis), and the mean lod of the blurred
+      pixels (lod > 0) nearest the texel, 0 where there are none, which mixes
+      the levels there;
+    * with ``fine``, :data:`IMAGE_FINE`, region-sized: (u, v) on the coarse
+      canvas of the point each pixel reads, the texel coordinates x cw / W and
+      y ch / H, 1, 1: the Map UV read-back of a compositor that cannot place a
+      region, where ``frame_scale`` reads the same points. Without: the
+      compositor reads the canvas back through ``frame_scale``."""
     x0, y0, x1, y1 = region
     bw, bh = x1 - x0, y1 - y0
-    i0, i1 = _blocks(x0, x1)
-    j0, j1 = _blocks(y0, y1)
-    cw, ch = i1 - i0, j1 - j0
+    cw, ch = coarse_size(width, height)
     coarse = np.ones((ch, cw, 4), np.float32)
-    coarse[..., 0] = ((np.arange(i0, i1) * COARSE + COARSE / 2.0 - x0) / bw)[None, :]
-    coarse[..., 1] = ((np.arange(j0, j1) * COARSE + COARSE / 2.0 - y0) / bh)[:, None]
-    grid = np.zeros((ch * COARSE, cw * COARSE), np.float32)
-    ox, oy = x0 - i0 * COARSE, y0 - j0 * COARSE
-    grid[oy:oy + bh, ox:ox + bw] = np.asarray(lod, np.float32)
-    # block sums as two one-axis sums (rows, then columns): a 1080p region's
-    # 4-axis reduction took twice as long
-    total = np.maximum(grid, 0.0).reshape(ch, COARSE, -1).sum(axis=1).reshape(ch, cw, COARSE).sum(axis=2)
-    count = (grid > 0).reshape(ch, COARSE, -1).sum(axis=1, dtype=np.int32).reshape(ch, cw, COARSE).sum(axis=2)
+    coarse[..., 0] = ((np.arange(cw) * (width / cw) + 0.5 - x0) / bw)[None, :]
+    coarse[..., 1] = ((np.arange(ch) * (height / ch) + 0.5 - y0) / bh)[:, None]
+    lod = np.asarray(lod, np.float32)
+    tx, ty = _nearest_texels(x0, x1, width, cw), _nearest_texels(y0, y1, height, ch)
+    total = _texel_sums(_texel_sums(np.maximum(lod, 0.0), ty, ch, 0), tx, cw, 1)
+    count = _texel_sums(_texel_sums((lod > 0).astype(np.int32), ty, ch, 0), tx, cw, 1)
     coarse[..., 3] = np.where(count > 0, total / np.maximum(count, 1), 0.0)
-    return {IMAGE_COARSE: coarse, IMAGE_FINE: _fine_image(tuple(int(v) for v in region))}
+    images = {IMAGE_COARSE: coarse}
+    if fine:
+        images[IMAGE_FINE] = _fine_image(tuple(int(v) for v in region), int(width), int(height))
+    return images
 
 
 @functools.lru_cache(maxsize=1)
-def _fine_image(region: Tuple[int, int, int, int]) -> np.ndarray:
+def _fine_image(region: Tuple[int, int, int, int], width: int, height: int) -> np.ndarray:
     """:data:`IMAGE_FINE` of a region: it depends on the region alone, and at
     1080p making it (28 MB of fresh pages) was a fifth of the images stage, in
     every frame, although the add-on writes it only when the region moves.
     Read-only: the cache hands the same array to every caller."""
     x0, y0, x1, y1 = region
-    i0, i1 = _blocks(x0, x1)
-    j0, j1 = _blocks(y0, y1)
-    cw, ch = i1 - i0, j1 - j0
+    cw, ch = coarse_size(width, height)
     fine = np.ones((y1 - y0, x1 - x0, 4), np.float32)
-    fine[..., 0] = (((np.arange(x0, x1) + 0.5) / COARSE - i0) / cw)[None, :]
-    fine[..., 1] = (((np.arange(y0, y1) + 0.5) / COARSE - j0) / ch)[:, None]
+    # Map UV reads the texel whose centre is at uv x size - 0.5
+    fine[..., 0] = ((np.arange(x0, x1) * (cw / width) + 0.5) / cw)[None, :]
+    fine[..., 1] = ((np.arange(y0, y1) * (ch / height) + 0.5) / ch)[:, None]
     fine.flags.writeable = False
     return fine
 
@@ -854,6 +908,27 @@ def _softened(img: np.ndarray) -> np.ndarray:
     k = [np.float32(c) for c in SOFTEN_TAPS]
     rows = sum(k[i] * img[np.clip(np.arange(h) + i - 1, 0, h - 1)] for i in range(3))
     return sum(k[i] * rows[:, np.clip(np.arange(w) + i - 1, 0, w - 1)] for i in range(3)).astype(np.float32)
+
+
+def _scaled_to_frame(img: np.ndarray, frame_hw) -> np.ndarray:
+    """Blender's Scale to the render size, stretched (``frame_scale``, as 3.4
+    does it): pixel (x, y) of the frame is the bilinear read of ``img`` at
+    texel coordinates (x n / W, y m / H), texel centres on whole numbers,
+    0 past the canvas."""
+    h, w = frame_hw
+    m, n = img.shape[:2]
+    padded = np.zeros((m + 1, n + 1) + img.shape[2:], np.float32)
+    padded[:m, :n] = img
+
+    def taps(count, size):
+        pos = np.arange(count) * (size / count)
+        first = np.floor(pos).astype(np.int64)
+        return first, (pos - first).astype(np.float32)
+
+    x, fx = taps(w, n)
+    y, fy = taps(h, m)
+    rows = padded[y] * (1.0 - fy)[:, None, None] + padded[y + 1] * fy[:, None, None]
+    return (rows[:, x] * (1.0 - fx)[None, :, None] + rows[:, x + 1] * fx[None, :, None]).astype(np.float32)
 
 
 def _region_origin(region_hw, dx: float, dy: float, frame_hw) -> Tuple[int, int]:
@@ -973,6 +1048,10 @@ def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, 
         return np.stack([np.broadcast_to(np.asarray(inp(i), np.float32), hw) for i in range(4)], axis=-1)
     if kind == "map_uv":
         return map_uv(inp(0), inp(1))
+    if kind == "frame_scale":
+        return _scaled_to_frame(np.asarray(inp(0), np.float32), frame_hw)
+    if kind == "keep":
+        return inp(0)
     if kind == "blur":
         return blur(inp(0), props["sigma"])
     if kind == "soften":
