@@ -362,6 +362,9 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
     elif kind == "map_uv":
         if not sockets:
             node.alpha = 0  # no fading by uv derivatives: Map UV only premultiplies by vis
+        elif props.get("footprint"):
+            # the filter sized by the uv's derivatives, as Map UV always filters before 5.0
+            _set_menu(node, "Interpolation", "Anisotropic")
     return node
 
 

@@ -371,7 +371,10 @@ GROUP_NODES.update({
     "coarse_image": ("image", {"image": IMAGE_COARSE}, {}),
     "fine_image": ("image", {"image": IMAGE_FINE}, {}),
     "sep_coarse": _separate(),  # the coarse image's alpha: the coarse texel's lod
-    "to_coarse": ("map_uv", {}, {}),
+    # averaging its footprint (a texel's 4x4 pixels), where a host lets Map UV
+    # choose: 5.0's offers a bilinear read, the default, which would take one
+    # pixel of the 16
+    "to_coarse": ("map_uv", {"footprint": True}, {}),
     "from_coarse": ("map_uv", {}, {}),
     # The read-back where the compositor places regions (3.x-4.1): the coarse
     # canvas stretched to the frame (a bilinear read per pixel, a tenth of a
