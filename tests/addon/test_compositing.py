@@ -351,7 +351,7 @@ def test_debug_switches():
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
                                                "use_bounce": False, "use_passes": True, "use_hidden": False,
                                                "hidden_at_pixel": False, "lift_in_1": True, "lift_out_1": True,
-                                               "coarse_by_scale": True}
+                                               "coarse_by_scale": True, "d_buffered": True}
     assert cg.switch_states("NONE", whole_frame=True)["hidden_at_pixel"]
     assert not any(cg.switch_states("NONE", soften_filters=False)[name] for name in ("lift_in_1", "lift_out_1"))
 

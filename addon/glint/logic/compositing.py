@@ -353,6 +353,12 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "world_replaced": _mix("SUBTRACT"),             # C - rep * colour
     "world_delta": _mix("MULTIPLY", {0: 1.0}),      # W (C - rep * colour)
     "use_passes": ("switch", {"on": True}, {}),
+    # D made once where the compositor would make it again for each node that
+    # reads it (3.x-4.1's Tiled compositor: the first level's blur, the coarse
+    # canvas's Map UV, the first mix and, with the bounce, its source each
+    # evaluate the chain behind D anew); after 4.1 each node is one pass anyway.
+    "d_kept": ("keep", {}, {}),
+    "d_buffered": ("switch", {"on": False}, {}),
     "bounce_map_uv": ("map_uv", {}, {}),  # vis * D(u, v)
     "bounce_weighted": _mix("MULTIPLY", {0: 1.0}),  # W * vis * D(u, v)
     "bounced": _mix("ADD", {0: 1.0}),               # D2 = D + W * vis * D(u, v)
@@ -465,18 +471,22 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("weight_image", 0, "world_delta", 2),
     # input 0 when off: the world's path, the passes' nodes not run
     ("world_delta", 0, "use_passes", 0),
+    # input 0 when off: D as it is; on: D made once (d_kept)
+    ("use_passes", 0, "d_kept", 0),
+    ("use_passes", 0, "d_buffered", 0),
+    ("d_kept", 0, "d_buffered", 1),
     ("delta", 0, "use_passes", 1),
-    ("use_passes", 0, "delta_to_frame", 0),
+    ("d_buffered", 0, "delta_to_frame", 0),
     (GROUP_IN, 0, "bounce_source", 1),
     ("delta_to_frame", 0, "bounce_source", 2),
     ("bounce_source", 0, "bounce_map_uv", 0),
     ("uv_image", 0, "bounce_map_uv", 1),
     ("bounce_map_uv", 0, "bounce_weighted", 1),
     ("weight_image", 0, "bounce_weighted", 2),
-    ("use_passes", 0, "bounced", 1),
+    ("d_buffered", 0, "bounced", 1),
     ("bounce_weighted", 0, "bounced", 2),
     # input 0 when off: D alone, the second Map UV not run
-    ("use_passes", 0, "use_bounce", 0),
+    ("d_buffered", 0, "use_bounce", 0),
     ("bounced", 0, "use_bounce", 1),
 ]
 # every Translate moves by the region's offset, or by minus it
@@ -588,12 +598,13 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     (``soften_filters``: host/nodes.soften_is_a_filter), and whether the group
     works on the whole frame (``whole_frame``: a compositor that cannot place a
     region, host/nodes.compositor_places_regions), where a hidden side's
-    light is the frame at the pixel as it is and the coarse levels come back
-    through the fine image's Map UV (elsewhere, through ``frame_scale``)."""
+    light is the frame at the pixel as it is, the coarse levels come back
+    through the fine image's Map UV (elsewhere, through ``frame_scale``) and D
+    is not copied into a buffer (elsewhere, ``d_kept``)."""
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
               "use_hidden": bool(use_hidden), "hidden_at_pixel": bool(whole_frame),
-              "coarse_by_scale": not whole_frame}
+              "coarse_by_scale": not whole_frame, "d_buffered": not whole_frame}
     states.update((name, bool(soften_filters)) for name in SOFTEN_LIFT_SWITCHES)
     return states
 
