@@ -38,6 +38,7 @@ import blender_scene_kit as kit  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "addon"))
 from glint import host  # noqa: E402  (the compositor tree of this Blender)
+from glint.logic import compositing  # noqa: E402  (the coarse canvas's grid)
 
 
 def _args():
@@ -65,12 +66,10 @@ def _scene(size):
     w, h = size
     rng = np.random.default_rng(1)
     frame = _image("bench frame", rng.random((h, w, 4)))
-    cw, ch = w // 4 + 1, h // 4 + 1  # logic/compositing.coarse_size
+    cw, ch = compositing.coarse_size(w, h)
     _image("bench coarse", rng.random((ch, cw, 4)))
-    fine = np.ones((h, w, 4), np.float32)
-    fine[..., 0] = ((np.arange(w) * (cw / w) + 0.5) / cw)[None, :]
-    fine[..., 1] = ((np.arange(h) * (ch / h) + 0.5) / ch)[:, None]
-    _image("bench fine", fine)
+    grid = compositing.coarse_images(np.zeros((h, w), np.float32), (0, 0, w, h), w, h)
+    _image("bench fine", grid[compositing.IMAGE_FINE])
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     uv = np.ones((h, w, 4), np.float32)
     uv[..., 0] = (xx + 0.5) / w  # a smooth uv: Map UV's filter footprint stays a pixel

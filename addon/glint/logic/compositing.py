@@ -827,9 +827,10 @@ def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int
 
 @functools.lru_cache(maxsize=1)
 def _fine_image(region: Tuple[int, int, int, int], width: int, height: int) -> np.ndarray:
-    """:data:`IMAGE_FINE` of a region: it depends on the region alone, and at
-    1080p making it (28 MB of fresh pages) was a fifth of the images stage, in
-    every frame, although the add-on writes it only when the region moves.
+    """:data:`IMAGE_FINE` of a region: it depends on the region and the frame's
+    size alone, and at 1080p making it (28 MB of fresh pages) was a fifth of the
+    images stage, in every frame, although the add-on writes it only when the
+    region moves.
     Read-only: the cache hands the same array to every caller."""
     x0, y0, x1, y1 = region
     cw, ch = coarse_size(width, height)
