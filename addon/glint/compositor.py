@@ -213,7 +213,8 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
     levels run (``rough``: some reflective material of the scene is rough),
     whether the second bounce does, whether S is the world colour x W
     (``world_specular``) and whether hidden sides are shown (the frame then
-    fills the hidden image: ``settings.shows_hidden_sides``)."""
+    fills the hidden image: ``settings.shows_hidden_sides``), and the mute of
+    the nodes that only a Switch's dropped side reads."""
     group = find_group()
     if group is None:
         return
@@ -225,6 +226,13 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
         node = group.nodes.get(name)
         if node is not None:
             host_nodes.set_switch(node, check)
+    # What only a dropped side of a Switch reads is muted: Blender 5.x
+    # computes both sides (cg.dead_nodes).
+    dead = cg.dead_nodes(states)
+    for name in cg.GROUP_NODES:
+        node = group.nodes.get(name)
+        if node is not None and node.mute != (name in dead):
+            node.mute = name in dead
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:

@@ -356,6 +356,34 @@ def test_debug_switches():
     assert not any(cg.switch_states("NONE", soften_filters=False)[name] for name in ("lift_in_1", "lift_out_1"))
 
 
+def test_the_muted_nodes_are_exactly_those_no_output_reads(monkeypatch):
+    """The model reads a node only when an output needs it through the sides its
+    Switches pass: every such node must stay unmuted, and every other is muted.
+    Over every combination of the switches' inputs."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(h=6, w=8)
+    images = images_of(base, position, spec, uv, weight, lod)
+    read = set()
+    node_output = cg._node_output
+
+    def recording(node, *args, **kwargs):
+        read.add(node)
+        return node_output(node, *args, **kwargs)
+
+    monkeypatch.setattr(cg, "_node_output", recording)
+    switches = {name for name, (kind, _, _) in cg.GROUP_NODES.items() if kind == "switch"}
+    flags = ("use_blur", "use_bounce", "world_specular", "use_hidden", "soften_filters", "whole_frame")
+    for view in [v for v, _, _ in cg.DEBUG_VIEWS]:
+        for bits in range(1 << len(flags)):
+            kw = {name: bool(bits >> i & 1) for i, name in enumerate(flags)}
+            read.clear()
+            cg.evaluate_group(base, images, np_map_uv, gauss_clamp, debug_view=view, **kw)
+            dead = cg.dead_nodes(cg.switch_states(view, *(kw[name] for name in flags)))
+            assert read - switches == set(cg.GROUP_NODES) - switches - dead, (view, kw)
+            assert "map_uv" not in dead and not dead & {"uv_image", "weight_image"}, (view, kw)
+    states = cg.switch_states("NONE", True, False, whole_frame=True)
+    assert {"bounce_map_uv", "hidden_light", "hidden_uv_image", "coarse_to_frame", "d_kept"} <= cg.dead_nodes(states)
+
+
 def test_group_matches_glint_core_for_a_mirror(core):
     """Where nothing is rough the group and glint_core's stages compute the same
     thing: the core's reflection colour x its weight, replacing S by visibility."""

@@ -129,21 +129,22 @@ res['names']['rgb'] = t.nodes[cg.WORLD_COLOUR_NODE].outputs[0].name
 cube_mat = s.objects['Cube'].material_slots[0].material
 cube_mat.node_tree.nodes['Principled BSDF'].inputs['Roughness'].default_value = 0.1
 from glint import compositor as glint_compositor
-bounce = [hn.switch_is_on(g.nodes['use_bounce'])]
+bounce = [hn.switch_is_on(g.nodes['use_bounce'])]; muted = [g.nodes['bounce_map_uv'].mute]
 plane = bpy.data.objects.new('Second Reflector', bpy.data.meshes.new('Second Reflector'))
 plane.data.materials.append(s.objects['Cube'].material_slots[0].material)
 s.collection.objects.link(plane)
 glint_compositor.ensure(s)
-bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
+bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
 s.glint.second_bounce = 'OFF'
-bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
+bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
 plane.hide_render = True
 s.glint.second_bounce = 'ON'
-bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
+bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
 s.glint.second_bounce = 'AUTO'
-bounce.append(hn.switch_is_on(g.nodes['use_bounce']))
+bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
 bpy.data.objects.remove(plane)
 res['bounce'] = bounce
+res['bounce_muted'] = muted
 s.glint.preset = 'HIGH'
 res['preset'] = [s.glint.march, s.glint.resolution, s.glint.steps]
 from glint import native as glint_native
@@ -202,6 +203,8 @@ def test_compositor_setup_keeps_user_nodes_and_is_removed_cleanly(blender):
     assert res["switch"] == [True, False]
     # Auto with one reflector, Auto with two, Off, On with the second hidden, Auto so
     assert res["bounce"] == [False, True, False, True, False]
+    # What only the bounce reads is muted while it is off: 5.x computes a Switch's dropped side.
+    assert res["bounce_muted"] == [not on for on in res["bounce"]]
     high = res["core_high"]  # the add-on's presets are the core's
     assert res["preset"] == [high["march"].upper(), pytest.approx(high["resolution"]), high["steps"]]
     assert res["preset_after_edit"] == "CUSTOM"

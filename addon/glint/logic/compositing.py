@@ -609,6 +609,34 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     return states
 
 
+def dead_nodes(states: Dict[str, bool]) -> frozenset:
+    """The group's nodes whose every path to an output of the group runs into
+    the side of a Switch that ``states`` (:func:`switch_states`) does not pass.
+
+    The add-on mutes them. Blender 5.x's compositor evaluates both inputs of a
+    Switch, the side it drops included, so without the mute the second
+    bounce's Map UV, the hidden sides' other light and the other read-back of
+    the coarse levels ran on every frame that did not use them (docs/addon.md,
+    *Both sides of a Switch*); a muted node passes its first input through and
+    computes nothing. Earlier compositors skip the dropped side themselves,
+    so there the mute changes nothing. Every output of the group counts, not
+    only the frame's: a user may wire the others (the layers EXR does)."""
+    incoming: Dict[str, List[Tuple[str, int]]] = {}
+    for src, _, dst, di in GROUP_LINKS:
+        incoming.setdefault(dst, []).append((src, di))
+    live = set()
+    todo = [GROUP_OUT]
+    while todo:
+        node = todo.pop()
+        for src, di in incoming.get(node, ()):
+            if node in states and GROUP_NODES[node][0] == "switch" and di != (1 if states[node] else 0):
+                continue  # the side this Switch drops
+            if src != GROUP_IN and src not in live:
+                live.add(src)
+                todo.append(src)
+    return frozenset(name for name in GROUP_NODES if name not in live)
+
+
 # The second bounce setting: enum value -> (label, description).
 SECOND_BOUNCE = (
     ("AUTO", "Auto", "When the scene has two or more sharp or metallic reflectors, which can show each "
@@ -1032,7 +1060,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
         if key not in cache:
             if node == GROUP_IN:
                 cache[key] = group_in[index]
-            elif GROUP_NODES[node][0] == "switch":  # resolved before anything runs: the other side is never read
+            elif GROUP_NODES[node][0] == "switch":  # the other side is never read: muted (dead_nodes)
                 cache[key] = inp(node, 1 if switches[node] else 0)
             else:
                 cache[key] = _node_output(node, index, lambda i: inp(node, i), frame_hw, images, map_uv, blur,
