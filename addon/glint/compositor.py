@@ -27,10 +27,13 @@ LAYOUT_KEY = "glint_layout"
 
 
 # A group saved with another hash (an older description, or lowered for a
-# Blender whose nodes take their options otherwise) is rebuilt.
+# Blender whose nodes take their options otherwise) is rebuilt. MUTE_RULE is
+# in it so that an older Glint, which never writes a node's mute, rebuilds a
+# group this one muted parts of (cg.dead_nodes) instead of running it so.
+MUTE_RULE = "dead nodes muted"
 LAYOUT_HASH = hashlib.sha1((repr(sorted(cg.GROUP_NODES.items())) + repr(cg.GROUP_LINKS) +
                             repr(cg.GROUP_OUTPUTS) + repr(host_nodes.options_are_sockets()) +
-                            host_nodes.lowered("soften")).encode()).hexdigest()[:12]
+                            host_nodes.lowered("soften") + MUTE_RULE).encode()).hexdigest()[:12]
 
 
 # ----------------------------------------------------------------------------
