@@ -618,8 +618,8 @@ def dead_nodes(states: Dict[str, bool]) -> frozenset:
     bounce's Map UV, the hidden sides' other light and the other read-back of
     the coarse levels ran on every frame that did not use them (docs/addon.md,
     *Both sides of a Switch*); a muted node passes its first input through and
-    computes nothing. Earlier compositors skip the dropped side themselves,
-    so there the mute changes nothing. Every output of the group counts, not
+    computes nothing. 3.4's and 4.3's compositors skip the dropped side
+    themselves, so there the mute changes nothing. Every output of the group counts, not
     only the frame's: a user may wire the others (the layers EXR does)."""
     incoming: Dict[str, List[Tuple[str, int]]] = {}
     for src, _, dst, di in GROUP_LINKS:
