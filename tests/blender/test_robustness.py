@@ -129,19 +129,22 @@ res['names']['rgb'] = t.nodes[cg.WORLD_COLOUR_NODE].outputs[0].name
 cube_mat = s.objects['Cube'].material_slots[0].material
 cube_mat.node_tree.nodes['Principled BSDF'].inputs['Roughness'].default_value = 0.1
 from glint import compositor as glint_compositor
-bounce = [hn.switch_is_on(g.nodes['use_bounce'])]; muted = [g.nodes['bounce_map_uv'].mute]
+bounce, muted = [], []
+def record():  # the bounce's Switch, and the mute of what only it reads
+    bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
+record()
 plane = bpy.data.objects.new('Second Reflector', bpy.data.meshes.new('Second Reflector'))
 plane.data.materials.append(s.objects['Cube'].material_slots[0].material)
 s.collection.objects.link(plane)
 glint_compositor.ensure(s)
-bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
+record()
 s.glint.second_bounce = 'OFF'
-bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
+record()
 plane.hide_render = True
 s.glint.second_bounce = 'ON'
-bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
+record()
 s.glint.second_bounce = 'AUTO'
-bounce.append(hn.switch_is_on(g.nodes['use_bounce'])); muted.append(g.nodes['bounce_map_uv'].mute)
+record()
 bpy.data.objects.remove(plane)
 res['bounce'] = bounce
 res['bounce_muted'] = muted
