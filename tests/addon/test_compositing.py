@@ -145,12 +145,8 @@ def images_of(base, position, spec, uv, weight, lod, debug=None, hidden=None):
     w = weight.copy()
     w[..., 3] = lod
     h, wd = base.shape[:2]
-    own = np.ones_like(base)  # the hidden sides on the whole frame: each pixel's own uv
-    own[..., 0] = ((np.arange(wd) + 0.5) / wd)[None, :]
-    own[..., 1] = ((np.arange(h) + 0.5) / h)[:, None]
-    own[..., 2] = 0 if hidden is None else hidden[..., 3] > 0
     return {cg.IMAGE_UV: uv_image(uv, hidden), cg.IMAGE_WEIGHT: w,
-            cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden, cg.IMAGE_HIDDEN_UV: own,
+            cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
             cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec,
             **cg.coarse_images(lod, (0, 0, wd, h), wd, h)}
@@ -188,14 +184,11 @@ def with_hidden_sides(uv, seed=5):
 @pytest.mark.parametrize("bounce", [False, True])
 @pytest.mark.parametrize("whole_frame", [False, True])
 def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bounce, whole_frame):
-    """``whole_frame`` (a host whose group works on the whole frame): the light
-    is the frame itself, and the group does not read the hidden uv image."""
+    """``whole_frame``: a host whose group works on the whole frame."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     uv, hidden = with_hidden_sides(uv)
     assert (hidden[..., 3] > 0).sum() > 10
     images = images_of(base, position, spec, uv, weight, lod, hidden=hidden)
-    if whole_frame:
-        del images[cg.IMAGE_HIDDEN_UV]
     if world:  # S = the world colour x W (the world's path)
         colour = weight.copy()
         kw = dict(specular_light=light[0, 0], specular_color=weight, world_specular=True)
@@ -350,9 +343,8 @@ def test_debug_switches():
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
                                                "use_bounce": False, "use_passes": True, "use_hidden": False,
-                                               "hidden_at_pixel": False, "lift_in_1": True, "lift_out_1": True,
+                                               "lift_in_1": True, "lift_out_1": True,
                                                "coarse_by_scale": True, "d_buffered": True}
-    assert cg.switch_states("NONE", whole_frame=True)["hidden_at_pixel"]
     assert not any(cg.switch_states("NONE", soften_filters=False)[name] for name in ("lift_in_1", "lift_out_1"))
 
 
@@ -381,7 +373,7 @@ def test_the_muted_nodes_are_exactly_those_no_output_reads(monkeypatch):
             assert read - switches == set(cg.GROUP_NODES) - switches - dead, (view, kw)
             assert "map_uv" not in dead and not dead & {"uv_image", "weight_image"}, (view, kw)
     states = cg.switch_states("NONE", True, False, whole_frame=True)
-    assert {"bounce_map_uv", "hidden_light", "hidden_uv_image", "coarse_to_frame", "d_kept"} <= cg.dead_nodes(states)
+    assert {"bounce_map_uv", "hidden_light", "box_back_x", "coarse_to_frame", "d_kept"} <= cg.dead_nodes(states)
 
 
 def test_group_matches_glint_core_for_a_mirror(core):
@@ -535,17 +527,13 @@ def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
     assert (box[2] - box[0]) % 2 == 0 and (box[3] - box[1]) % 2 == 0
     images, offset = cg.hidden_images(np.dstack([np.ones((20, 30, 3)), seen]).astype(np.float32), region, 30, 20)
     bw, bh = box[2] - box[0], box[3] - box[1]
-    assert images[cg.IMAGE_HIDDEN].shape == images[cg.IMAGE_HIDDEN_UV].shape == (bh, bw, 4)
+    assert set(images) == {cg.IMAGE_HIDDEN} and images[cg.IMAGE_HIDDEN].shape == (bh, bw, 4)
     assert offset == (box[0] + bw / 2 - 15, box[1] + bh / 2 - 10)
-    # each box pixel's uv is its own centre in the frame
-    assert images[cg.IMAGE_HIDDEN_UV][0, 0, 0] == pytest.approx((box[0] + 0.5) / 30)
-    assert images[cg.IMAGE_HIDDEN_UV][-1, 0, 1] == pytest.approx((box[3] - 0.5) / 20)
-    assert np.array_equal(images[cg.IMAGE_HIDDEN_UV][..., 2], seen[box[1]:box[3], box[0]:box[2]])
+    assert np.array_equal(images[cg.IMAGE_HIDDEN][..., 3], seen[box[1]:box[3], box[0]:box[2]])
     none, _ = cg.hidden_images(None, region, 30, 20)
     assert none[cg.IMAGE_HIDDEN].shape[:2] == (2, 2) and not none[cg.IMAGE_HIDDEN].any()
     whole, at = cg.hidden_images(None, region, 30, 20, placeable=False)
     assert whole[cg.IMAGE_HIDDEN].shape[:2] == (18, 26) and at == (0.0, 0.0)
-    assert cg.IMAGE_HIDDEN_UV not in whole  # the group reads the light from the frame there
 
 
 def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sigma():

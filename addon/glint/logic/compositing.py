@@ -159,9 +159,8 @@ IMAGE_OFFSET = "Glint Offset"  # 1x1: where the region's images go in the frame 
 IMAGE_COARSE = "Glint Coarse"  # the coarse canvas of the wide blur levels (:func:`coarse_images`)
 IMAGE_FINE = "Glint Fine"      # where each region pixel reads the coarse canvas
 IMAGE_HIDDEN = "Glint Hidden"  # (albedo, vis) of the hidden sides rays come into, on their box
-IMAGE_HIDDEN_UV = "Glint Hidden UV"  # each box pixel's own uv in the frame: where Map UV reads its light
 ALL_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_DEBUG, IMAGE_POSITION, IMAGE_NORMAL, IMAGE_SPECULAR, IMAGE_OFFSET,
-              IMAGE_COARSE, IMAGE_FINE, IMAGE_HIDDEN, IMAGE_HIDDEN_UV)
+              IMAGE_COARSE, IMAGE_FINE, IMAGE_HIDDEN)
 # The images cut to the frame's region (the others stay frame-sized, or, the
 # hidden sides', their own box inside it).
 REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE)
@@ -169,7 +168,7 @@ REGION_IMAGES = (IMAGE_UV, IMAGE_WEIGHT, IMAGE_FINE)
 # C = 0 and D = 0): what a frame Glint does not handle clears.
 PASS_THROUGH_IMAGE = IMAGE_UV
 # Images earlier versions of the group read; removed with Glint's own.
-LEGACY_IMAGES = ("Glint Mask",)
+LEGACY_IMAGES = ("Glint Mask", "Glint Hidden UV")
 
 # Engines that trace reflections themselves: Glint leaves their frame as it is
 # (a screen-space guess can only be worse than a path-traced reflection).
@@ -275,7 +274,9 @@ def _translate(sign: int = 1, onto: str = "frame"):
     place in the frame) or by minus it (sign -1: the frame moved so that the
     region's pixels lie where a region-sized canvas centred on it reads them);
     ``onto="region"``: by the hidden box's offset, the box's canvas to its place
-    in the region (the offset image's last two channels)."""
+    in the region (the offset image's last two channels); ``onto="box"``: the
+    frame moved by minus the box's offset in the frame, so that a box-sized
+    operation reads the frame's pixels under the box."""
     return ("translate", {"sign": sign, "onto": onto}, {})
 
 
@@ -324,11 +325,13 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     # Hidden sides: C + rep * albedo * frame (see "Hidden sides" above), made
     # on the hidden pixels' box and moved into the region.
     "hidden_image": ("image", {"image": IMAGE_HIDDEN}, {}),
-    "hidden_uv_image": ("image", {"image": IMAGE_HIDDEN_UV}, {}),
-    "hidden_light": ("map_uv", {}, {}),             # the frame at each box pixel
-    # A group that works on the whole frame (the box is the frame) takes the
-    # frame itself: the same light, without a frame-sized Map UV and uv image.
-    "hidden_at_pixel": ("switch", {"on": False}, {}),
+    # The frame moved by minus the box's offset in the frame (the region's plus
+    # the box's in the region), so that the box-sized Multiply reads the
+    # frame's pixels under the box: the light at each hidden pixel, read in
+    # whole pixels (a whole-frame group moves it by 0).
+    "box_back_x": _math("SUBTRACT", False, {}),
+    "box_back_y": _math("SUBTRACT", False, {}),
+    "hidden_light": _translate(-1, onto="box"),
     "hidden_colour": _mix("MULTIPLY", {0: 1.0}),   # albedo * frame
     "hidden_to_region": _translate(1, onto="region"),
     "with_hidden": _mix("ADD"),                    # C + rep * albedo * frame
@@ -433,12 +436,13 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("weight_image", 0, "sep_weight", 0),
     ("sep_offset", 0, "offset_back_x", 0),
     ("sep_offset", 1, "offset_back_y", 0),
+    ("offset_back_x", 0, "box_back_x", 0),
+    ("sep_offset", 2, "box_back_x", 1),
+    ("offset_back_y", 0, "box_back_y", 0),
+    ("sep_offset", 3, "box_back_y", 1),
     (GROUP_IN, 0, "hidden_light", 0),
-    ("hidden_uv_image", 0, "hidden_light", 1),
     ("hidden_image", 0, "hidden_colour", 1),
-    ("hidden_light", 0, "hidden_at_pixel", 0),
-    (GROUP_IN, 0, "hidden_at_pixel", 1),
-    ("hidden_at_pixel", 0, "hidden_colour", 2),
+    ("hidden_light", 0, "hidden_colour", 2),
     ("hidden_colour", 0, "hidden_to_region", 0),
     ("sep_uv", 3, "with_hidden", 0),
     ("map_uv", 0, "with_hidden", 1),
@@ -495,6 +499,8 @@ for _t, (_kind, _props, _) in GROUP_NODES.items():
         continue
     if _props["onto"] == "region":
         GROUP_LINKS += [("sep_offset", 2, _t, 1), ("sep_offset", 3, _t, 2)]
+    elif _props["onto"] == "box":
+        GROUP_LINKS += [("box_back_x", 0, _t, 1), ("box_back_y", 0, _t, 2)]
     elif _props["sign"] > 0:
         GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
     else:
@@ -603,7 +609,7 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     is not copied into a buffer (elsewhere, ``d_kept``)."""
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
-              "use_hidden": bool(use_hidden), "hidden_at_pixel": bool(whole_frame),
+              "use_hidden": bool(use_hidden),
               "coarse_by_scale": not whole_frame, "d_buffered": not whole_frame}
     states.update((name, bool(soften_filters)) for name in SOFTEN_LIFT_SWITCHES)
     return states
@@ -749,31 +755,23 @@ def hidden_box(seen: np.ndarray, region: Tuple[int, int, int, int]) -> Tuple[int
 
 def hidden_images(hidden: Optional[np.ndarray], region: Tuple[int, int, int, int], width: int, height: int,
                   placeable: bool = True) -> Tuple[Dict[str, np.ndarray], Tuple[float, float]]:
-    """The hidden sides' two images on their box (:func:`hidden_box`) and the
+    """The hidden sides' image on their box (:func:`hidden_box`) and the
     Translate that puts the box in the region: :data:`IMAGE_HIDDEN` (albedo,
     vis) as ``composite_layers`` gives it (None: a frame without hidden sides,
-    all 0), :data:`IMAGE_HIDDEN_UV` (u, v, hidden, 1), each box pixel's centre in
-    the frame, where Map UV reads the light that the formula multiplies (hidden:
-    1 on the hidden sides, 0 on the box's other pixels, which Map UV then does
-    not filter). Not
-    ``placeable`` (a compositor that takes a Translate's offset as one value,
-    host/nodes.compositor_places_regions): the box is the region, which is the
-    frame, and the group reads the light from the frame itself (its
-    ``hidden_at_pixel`` Switch): no uv image."""
-    seen = np.zeros((height, width), bool) if hidden is None else np.asarray(hidden)[..., 3] > 0
-    x0, y0, x1, y1 = hidden_box(seen, region) if placeable else region
+    all 0). The group reads the frame's light under the box through a
+    Translate by the box's offset (``hidden_light``), so the box needs no uv.
+    Not ``placeable`` (a compositor that takes a Translate's offset as one
+    value, host/nodes.compositor_places_regions): the box is the region, which
+    is the frame."""
+    if placeable:
+        seen = np.zeros((height, width), bool) if hidden is None else np.asarray(hidden)[..., 3] > 0
+        x0, y0, x1, y1 = hidden_box(seen, region)
+    else:
+        x0, y0, x1, y1 = region
     albedo = np.zeros((y1 - y0, x1 - x0, 4), np.float32) if hidden is None else hidden[y0:y1, x0:x1]
     rx0, ry0, rx1, ry1 = region
     offset = (x0 + (x1 - x0) / 2.0 - (rx0 + rx1) / 2.0, y0 + (y1 - y0) / 2.0 - (ry0 + ry1) / 2.0)
-    if not placeable:
-        return {IMAGE_HIDDEN: albedo}, offset
-    own = np.ones((y1 - y0, x1 - x0, 4), np.float32)
-    own[..., 0] = ((np.arange(x0, x1) + 0.5) / width)[None, :]
-    own[..., 1] = ((np.arange(y0, y1) + 0.5) / height)[:, None]
-    # Map UV filters only where the third channel is above 0: the box's other
-    # pixels, whose albedo is 0, cost it the uv reads alone.
-    own[..., 2] = seen[y0:y1, x0:x1]
-    return {IMAGE_HIDDEN: albedo, IMAGE_HIDDEN_UV: own}, offset
+    return {IMAGE_HIDDEN: albedo}, offset
 
 
 def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, int, int],
@@ -1084,6 +1082,8 @@ def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, 
         dx, dy = (float(np.asarray(inp(i), np.float32).flat[0]) for i in (1, 2))
         if props["onto"] == "region":
             return _translated(inp(0), dx, dy, np.shape(images[IMAGE_UV])[:2])
+        if props["onto"] == "box":
+            return _region_of(inp(0), -dx, -dy, np.shape(images[IMAGE_HIDDEN])[:2], frame_hw)
         if props["sign"] < 0:
             return _region_of(inp(0), -dx, -dy, np.shape(images[IMAGE_UV])[:2], frame_hw)
         return _translated(inp(0), dx, dy, frame_hw)
