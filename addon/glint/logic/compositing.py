@@ -621,8 +621,8 @@ def dead_nodes(states: Dict[str, bool]) -> frozenset:
 
     The add-on mutes them. Blender 5.x's compositor evaluates both inputs of a
     Switch, the side it drops included, so without the mute the second
-    bounce's Map UV, the hidden sides' other light and the other read-back of
-    the coarse levels ran on every frame that did not use them (docs/addon.md,
+    bounce's Map UV and the other read-back of the coarse levels ran on every
+    frame that did not use them (docs/addon.md,
     *Both sides of a Switch*); a muted node passes its first input through and
     computes nothing. 3.4's and 4.3's compositors skip the dropped side
     themselves, so there the mute changes nothing. Every output of the group counts, not
