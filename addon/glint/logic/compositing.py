@@ -603,9 +603,8 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     whether the first blur level is the 3x3 filter, which needs the lift
     (``soften_filters``: host/nodes.soften_is_a_filter), and whether the group
     works on the whole frame (``whole_frame``: a compositor that cannot place a
-    region, host/nodes.compositor_places_regions), where a hidden side's
-    light is the frame at the pixel as it is, the coarse levels come back
-    through the fine image's Map UV (elsewhere, through ``frame_scale``) and D
+    region, host/nodes.compositor_places_regions), where the coarse levels
+    come back through the fine image's Map UV (elsewhere, through ``frame_scale``) and D
     is not copied into a buffer (elsewhere, ``d_kept``)."""
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
@@ -622,9 +621,8 @@ def dead_nodes(states: Dict[str, bool]) -> frozenset:
     The add-on mutes them. Blender 5.x's compositor evaluates both inputs of a
     Switch, the side it drops included, so without the mute the second
     bounce's Map UV and the other read-back of the coarse levels ran on every
-    frame that did not use them (docs/addon.md,
-    *Both sides of a Switch*); a muted node passes its first input through and
-    computes nothing. 3.4's and 4.3's compositors skip the dropped side
+    frame that did not use them (docs/addon.md, *Both sides of a Switch*); a
+    muted node passes its first input through and computes nothing. 3.4's and 4.3's compositors skip the dropped side
     themselves, so there the mute changes nothing. Every output of the group counts, not
     only the frame's: a user may wire the others (the layers EXR does)."""
     incoming: Dict[str, List[Tuple[str, int]]] = {}
