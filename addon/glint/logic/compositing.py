@@ -604,8 +604,9 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     (``soften_filters``: host/nodes.soften_is_a_filter), and whether the group
     works on the whole frame (``whole_frame``: a compositor that cannot place a
     region, host/nodes.compositor_places_regions), where the coarse levels
-    come back through the fine image's Map UV (elsewhere, through ``frame_scale``) and D
-    is not copied into a buffer (elsewhere, ``d_kept``)."""
+    come back through the fine image's Map UV (elsewhere, through
+    ``frame_scale``) and D is not copied into a buffer (elsewhere,
+    ``d_kept``)."""
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
               "use_hidden": bool(use_hidden),
@@ -622,9 +623,10 @@ def dead_nodes(states: Dict[str, bool]) -> frozenset:
     Switch, the side it drops included, so without the mute the second
     bounce's Map UV and the other read-back of the coarse levels ran on every
     frame that did not use them (docs/addon.md, *Both sides of a Switch*); a
-    muted node passes its first input through and computes nothing. 3.4's and 4.3's compositors skip the dropped side
-    themselves, so there the mute changes nothing. Every output of the group counts, not
-    only the frame's: a user may wire the others (the layers EXR does)."""
+    muted node passes its first input through and computes nothing. 3.4's
+    and 4.3's compositors skip the dropped side themselves, so there the mute
+    changes nothing. Every output of the group counts, not only the frame's:
+    a user may wire the others (the layers EXR does)."""
     incoming: Dict[str, List[Tuple[str, int]]] = {}
     for src, _, dst, di in GROUP_LINKS:
         incoming.setdefault(dst, []).append((src, di))
