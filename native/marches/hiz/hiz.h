@@ -90,9 +90,10 @@ void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out);
 // silhouette does not bend it); the shading normal where an axis has no seen
 // neighbour or the texel none usable. xyz unit length, facing the side the
 // shading normal is on. Row y of them, into `out` (sized to the image);
-// `seen` covers rows y - 2 .. y + 2 (those inside the image).
+// `seen` covers rows y - 2 .. y + 2 (those inside the image). Eight texels
+// at a time where `isa` is the AVX2 walk's (hiz_base.h), the same normals.
 void hiz_plane_normals_row(const Image& position, const Image& normal, const SeenRows& seen, int y,
-                           HizPlanes& out);
+                           HizPlanes& out, WalkIsa isa);
 
 // The pyramid, and into `planes` the plane normals above that its base and
 // the walk use: both in one pass over the G-buffer, a row of normals and

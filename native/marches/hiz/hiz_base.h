@@ -1,7 +1,8 @@
-// The pyramid's base level, one row at a time, in the form the AVX2 version
-// (hiz_base_avx2.cpp) takes it: plain pointers, since that file shares no
-// inline code with the rest of the library. march_hiz.cpp's base_range() is
-// the scalar rule and explains it.
+// The pyramid's base level and its plane normals, one row at a time, in the
+// form the AVX2 versions (hiz_base_avx2.cpp, hiz_planes_avx2.cpp) take them:
+// plain pointers, since those files share no inline code with the rest of
+// the library. march_hiz.cpp's base_range() and hiz_planes.cpp's
+// plane_normal() are the scalar rules and explain them.
 #pragma once
 #include <cstddef>
 
@@ -26,5 +27,21 @@ struct BaseRow {
 // multiple of 8, bit for bit; returns n. Only where the CPU has AVX2
 // (hiz_walk_available(WalkIsa::Avx2)).
 int hiz_base_row_avx2(const BaseRow& row);
+
+// Row y of the plane normals: position rows y - 2 .. y + 2 and their seen
+// bytes (null for rows off the image), each at the row's first texel; the
+// shading normal's row y (4 floats a texel); out, 3 floats a texel.
+struct PlaneRow {
+  const float* position[5] = {};
+  const unsigned char* seen[5] = {};
+  const float* normal = nullptr;
+  float* out = nullptr;
+};
+
+// plane_normal() of texels [x_begin, x_end) of the row, bit for bit, eight at
+// a time: x_end - x_begin a multiple of 8, and x_begin >= 2, x_end <= width - 2
+// (the row's neighbours two texels away lie inside). Only where the CPU has
+// AVX2.
+void hiz_plane_normals_row_avx2(const PlaneRow& row, int x_begin, int x_end);
 
 }  // namespace glint::cpu

@@ -5,6 +5,7 @@
 
 #include "glint/stages.h"
 #include "hiz.h"
+#include "hiz_base.h"
 
 namespace glint::cpu {
 namespace {
@@ -88,8 +89,28 @@ void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out) {
 }
 
 void hiz_plane_normals_row(const Image& position, const Image& normal, const SeenRows& seen, int y,
-                           HizPlanes& out) {
-  for (int x = 0; x < position.width; ++x) plane_normal(position, normal, seen, x, y, out.px(x, y));
+                           HizPlanes& out, WalkIsa isa) {
+  int x_begin = 0, x_end = 0;  // the texels left to the AVX2 rows, if any
+#if defined(GLINT_WALK_AVX2)
+  if (isa == WalkIsa::Avx2 && position.width >= 12) {
+    PlaneRow r;
+    for (int k = 0; k < 5; ++k) {
+      const int yy = y - 2 + k;
+      if (yy < 0 || yy >= position.height) continue;
+      r.position[k] = position.px(0, yy);
+      r.seen[k] = seen.bytes.data() + static_cast<size_t>(yy - seen.y0) * seen.width;
+    }
+    r.normal = normal.px(0, y);
+    r.out = out.px(0, y);
+    x_begin = 2;
+    x_end = x_begin + (position.width - 4) / 8 * 8;
+    hiz_plane_normals_row_avx2(r, x_begin, x_end);
+  }
+#else
+  (void)isa;
+#endif
+  for (int x = 0; x < x_begin; ++x) plane_normal(position, normal, seen, x, y, out.px(x, y));
+  for (int x = x_end; x < position.width; ++x) plane_normal(position, normal, seen, x, y, out.px(x, y));
 }
 
 }  // namespace glint::cpu

@@ -491,7 +491,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     SeenRows seen;
     fill_seen_rows(position, std::max(0, y0 - 2), std::min(height, y1 + 2), seen);
     for (int y = y0; y < y1; ++y) {
-      hiz_plane_normals_row(position, normal, seen, y, planes);
+      hiz_plane_normals_row(position, normal, seen, y, planes, isa);
       float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
       int x = 0;
 #if defined(GLINT_WALK_AVX2)
