@@ -19,6 +19,7 @@ from . import gather
 from .host import data as host_data, engines, nodes as host_nodes
 from .logic import compositing as cg
 from .logic import materials
+from .logic import projection
 from .logic import settings as settings_logic
 from .logic import world as world_logic
 from .state import STATE
@@ -211,31 +212,54 @@ def build_group():
     return group
 
 
-def update_group(glint, rough: bool = True, bounce: bool = False, world_specular: bool = False) -> None:
+def update_group(glint, rough: bool = True, bounce: bool = False, world_specular: bool = False,
+                 frame_size: Optional[Tuple[int, int]] = None) -> None:
     """Push the values the group reads: the debug switches, whether the blur
     levels run (``rough``: some reflective material of the scene is rough),
     whether the second bounce does, whether S is the world colour x W
     (``world_specular``) and whether hidden sides are shown (the frame then
-    fills the hidden image: ``settings.shows_hidden_sides``), and the mute of
-    the nodes that only a Switch's dropped side reads."""
+    fills the hidden image: ``settings.shows_hidden_sides``), the coarse
+    read-back's shift for a ``frame_size`` (width, height) render
+    (cg.coarse_grid_shift, where the host needs one), and the mute of the
+    nodes that only a Switch's dropped side reads."""
     group = find_group()
     if group is None:
         return
     hidden = settings_logic.shows_hidden_sides({"fill_hidden": glint.fill_hidden,
                                                 "hidden_sides": glint.hidden_sides})
     states = cg.switch_states(glint.debug_view, rough, bounce, world_specular, hidden,
-                              host_nodes.soften_is_a_filter(), not host_nodes.compositor_places_regions())
+                              host_nodes.soften_is_a_filter(), not host_nodes.compositor_places_regions(),
+                              host_nodes.coarse_read_back_by_scale())
     for name, check in states.items():
         node = group.nodes.get(name)
         if node is not None:
             host_nodes.set_switch(node, check)
+    by_domain = host_nodes.scale_reads_by_domain()
+    grid = group.nodes.get("coarse_grid")
+    if grid is not None and by_domain and frame_size is not None:
+        for index, value in enumerate(cg.coarse_grid_shift(*frame_size), start=1):
+            sock = host_nodes.input_socket(grid, "translate", index)
+            if sock.default_value != value:
+                sock.default_value = value
     # What only a dropped side of a Switch reads is muted: Blender 5.x
     # computes both sides (cg.dead_nodes).
     dead = cg.dead_nodes(states)
+    if not by_domain:
+        dead = dead | {"coarse_grid"}  # no move to make: a muted node passes its image through
     for name in cg.GROUP_NODES:
         node = group.nodes.get(name)
         if node is not None and node.mute != (name in dead):
             node.mute = name in dead
+
+
+def render_frame_size(scene) -> Optional[Tuple[int, int]]:
+    """The (width, height) the scene renders and composites at, or None when
+    it renders nothing (a percentage that leaves no pixel)."""
+    r = scene.render
+    try:
+        return projection.render_size(r.resolution_x, r.resolution_y, r.resolution_percentage)
+    except projection.ProjectionError:
+        return None
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:
@@ -392,7 +416,7 @@ def ensure(scene, allow_changes: bool = True) -> Optional[str]:
     reflective_objects, rough = scene_reflectors(scene)
     STATE.second_bounce = cg.use_second_bounce(glint.second_bounce, reflective_objects)
     update_group(glint, rough, STATE.second_bounce,  # values only, written when they differ
-                 STATE.specular_source == world_logic.SOURCE_WORLD)
+                 STATE.specular_source == world_logic.SOURCE_WORLD, render_frame_size(scene))
     # A Composite node that receives nothing writes a black frame: feed it
     # Glint's image (a group rebuilt by an older Glint could leave it so).
     for sock in host_nodes.frame_outputs(tree):

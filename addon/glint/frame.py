@@ -343,9 +343,10 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
             # all zeros, and the same while the region keeps its size: written once
             # (on a compositor that cannot place them they are frame-sized)
             keys.update((name, ("none", region, placeable)) for name in hidden_imgs)
-    # where regions are placed the coarse canvas comes back through a Scale,
-    # not the fine image (compositing.switch_states)
-    images = compositing.region_images(uv, weight, region, offset, fine=not placeable)
+    # where the host's Scale brings the coarse canvas back, the fine image is
+    # not read (compositing.switch_states)
+    images = compositing.region_images(uv, weight, region, offset,
+                                       fine=not host_nodes.coarse_read_back_by_scale())
     images.update(hidden_imgs)
     frame.report.region = region
     if view in compositing.GBUFFER_DEBUG_VIEWS:

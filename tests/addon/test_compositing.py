@@ -556,6 +556,22 @@ def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sig
     assert np.allclose(filt["Image"], gauss["Image"], atol=ATOL)
 
 
+@pytest.mark.parametrize("wh", [(64, 48), (66, 50), (68, 52), (1920, 1080), (1918, 1078), (7, 3), (1, 1)])
+def test_the_grid_shift_places_a_domain_scale_s_read_on_the_texels_frame_scale_reads(wh):
+    """On 5.x the Scale and the Translate after it transform the canvas's
+    domain, which the Mix samples once at u = (x + 0.5 - W / 2 - t) / s + cw / 2
+    - 0.5 - c: a canvas centred on the frame, s = W / cw, c = -0.5 where cw and
+    W differ in parity (Blender's realize_on_domain, read in its source). With
+    coarse_grid_shift as t that is frame_scale's texel x cw / W at every pixel
+    (checked in Blender 5.2 to 2e-6 at 64x48, 66x50 and 68x52)."""
+    w, h = wh
+    for size, n, t in zip((w, h), cg.coarse_size(w, h), cg.coarse_grid_shift(w, h)):
+        c = -0.5 if n % 2 != size % 2 else 0.0
+        x = np.arange(size, dtype=np.float64)
+        u = (x + 0.5 - size / 2 - t) / (size / n) + n / 2 - 0.5 - c
+        assert np.allclose(u, x * n / size, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("hw", [(12, 16), (50, 66), (1, 1)])
 def test_the_coarse_canvas_comes_back_as_blenders_scale_reads_it(hw):
     """frame_scale's model against the read written out (3.4's Scale to the

@@ -136,6 +136,27 @@ def compositor_places_regions() -> bool:
     return "execution_mode" in bpy.types.CompositorNodeTree.bl_rna.properties
 
 
+def scale_reads_by_domain() -> bool:
+    """Whether a Scale (and a Translate after it) only transform the canvas's
+    domain, which the Mix that meets the frame samples once, bilinearly and
+    centred on the frame: the compositor 5.x shares with the GPU. There
+    ``compositing.coarse_grid_shift`` makes the Scale read the coarse canvas
+    where 3.x-4.1's does (checked on 5.2 to 2e-6 at 64x48, 66x50 and 68x52,
+    and 7e-5 at 1920x1080; docs/addon.md). 4.4-4.5's compositor may read so
+    too but is untested; 4.2-4.3's reads otherwise (not understood), so those
+    keep the fine image's Map UV. Feature-tested by 5.0's node options as
+    sockets, which came with it on every Blender tested."""
+    return options_are_sockets()
+
+
+def coarse_read_back_by_scale() -> bool:
+    """Whether the group brings the coarse levels back to the frame through
+    its Scale (``frame_scale``; a tenth of a Map UV's cost on 3.4), rather than
+    the fine image's Map UV: where regions are placed, or where the Scale is
+    placed by its domain."""
+    return compositor_places_regions() or scale_reads_by_domain()
+
+
 # Render Layers outputs by pass: 3.4-4.5 short names, 5.0+ words.
 PASS_OUTPUTS = {"glossy_direct": ("GlossDir", "Glossy Direct"),
                 "glossy_color": ("GlossCol", "Glossy Color")}
@@ -331,17 +352,7 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
             node.filter_type = "SOFTEN"
         _by_identifier(node.inputs, "Fac").default_value = 1.0
     elif kind == "translate":
-        # Whole-pixel moves (logic/compositing.image_region): Nearest keeps them
-        # exact where a Blender interpolates (4.2+); 3.4 has no such option.
-        if sockets:
-            for name in ("Extension X", "Extension Y"):
-                _set_menu(node, name, "Clip")
-            _set_menu(node, "Interpolation", "Nearest")
-        else:
-            node.use_relative = False
-            node.wrap_axis = "NONE"
-            if hasattr(node, "interpolation"):
-                node.interpolation = "Nearest"
+        _set_translate(node, props, sockets)
     elif kind == "keep":
         if sockets:
             _set_menu(node, "Type", "Gaussian")
@@ -366,6 +377,23 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
             # the filter sized by the uv's derivatives, as Map UV always filters before 5.0
             _set_menu(node, "Interpolation", "Anisotropic")
     return node
+
+
+def _set_translate(node, props, sockets: bool) -> None:
+    """Whole-pixel moves (logic/compositing.image_region): Nearest keeps them
+    exact where a Blender interpolates (4.2+); 3.4 has no such option. The
+    coarse read-back's move (onto "grid") is the last transform of the Scale
+    before it, whose read it places (compositing.coarse_grid_shift): on 5.x
+    the last node's interpolation is the one the Mix samples with."""
+    if sockets:
+        for name in ("Extension X", "Extension Y"):
+            _set_menu(node, name, "Clip")
+        _set_menu(node, "Interpolation", "Bilinear" if props.get("onto") == "grid" else "Nearest")
+    else:
+        node.use_relative = False
+        node.wrap_axis = "NONE"
+        if hasattr(node, "interpolation"):
+            node.interpolation = "Nearest"
 
 
 def _by_identifier(sockets, identifier: str):

@@ -276,7 +276,12 @@ def _translate(sign: int = 1, onto: str = "frame"):
     ``onto="region"``: by the hidden box's offset, the box's canvas to its place
     in the region (the offset image's last two channels); ``onto="box"``: the
     frame moved by minus the box's offset in the frame, so that a box-sized
-    operation reads the frame's pixels under the box."""
+    operation reads the frame's pixels under the box; ``onto="grid"``: the
+    coarse canvas stretched to the frame, moved by :func:`coarse_grid_shift`,
+    the node's own values, which the add-on writes per frame where the host
+    needs them (host/nodes.scale_reads_by_domain) and mutes the node elsewhere;
+    read bilinearly. There it makes the host's Scale read as ``frame_scale``
+    does alone, so this model passes the canvas through."""
     return ("translate", {"sign": sign, "onto": onto}, {})
 
 
@@ -385,13 +390,16 @@ GROUP_NODES.update({
     # pixel of the 16
     "to_coarse": ("map_uv", {"footprint": True}, {}),
     "from_coarse": ("map_uv", {}, {}),
-    # The read-back where the compositor places regions (3.x-4.1): the coarse
+    # The read-back where the host's Scale reads as frame_scale (3.x-4.1, and
+    # 5.x with coarse_grid: host/nodes.coarse_read_back_by_scale): the coarse
     # canvas stretched to the frame (a bilinear read per pixel, a tenth of a
-    # Map UV's cost there), then the frame's region taken out; the fine image
+    # Map UV's cost on 3.4), then the frame's region taken out; the fine image
     # is then not read (switch_states()).
     "coarse_kept": ("keep", {}, {}),
     "coarse_to_frame": ("frame_scale", {}, {}),
     "coarse_to_region": _translate(-1),
+    # after it, as the last transform a 5.x Scale's read takes: coarse_grid_shift
+    "coarse_grid": ("translate", {"sign": 1, "onto": "grid"}, {1: 0.0, 2: 0.0}),
     "coarse_by_scale": ("switch", {"on": False}, {}),
 })
 for _j, (_lod, _sigma) in enumerate(BLUR_LEVELS, start=1):
@@ -493,7 +501,7 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("d_buffered", 0, "use_bounce", 0),
     ("bounced", 0, "use_bounce", 1),
 ]
-# every Translate moves by the region's offset, or by minus it
+# every Translate moves by the region's offset or by minus it (the coarse grid's by its own values)
 for _t, (_kind, _props, _) in GROUP_NODES.items():
     if _kind != "translate":
         continue
@@ -501,6 +509,8 @@ for _t, (_kind, _props, _) in GROUP_NODES.items():
         GROUP_LINKS += [("sep_offset", 2, _t, 1), ("sep_offset", 3, _t, 2)]
     elif _props["onto"] == "box":
         GROUP_LINKS += [("box_back_x", 0, _t, 1), ("box_back_y", 0, _t, 2)]
+    elif _props["onto"] == "grid":
+        pass  # single values of its own (a 5.x Translate ignores a move read from an image)
     elif _props["sign"] > 0:
         GROUP_LINKS += [("sep_offset", 0, _t, 1), ("sep_offset", 1, _t, 2)]
     else:
@@ -551,9 +561,10 @@ GROUP_LINKS += [
     (_coarse_out, 0, "coarse_kept", 0),
     ("coarse_kept", 0, "coarse_to_frame", 0),
     ("coarse_to_frame", 0, "coarse_to_region", 0),  # moved by minus the offset (above)
+    ("coarse_to_region", 0, "coarse_grid", 0),
     # input 0 when off: the fine image's Map UV
     ("from_coarse", 0, "coarse_by_scale", 0),
-    ("coarse_to_region", 0, "coarse_by_scale", 1),
+    ("coarse_grid", 0, "coarse_by_scale", 1),
 ]
 GROUP_LINKS += [
     # the Switch takes input 0 when off: the unblurred D2, levels not run
@@ -594,7 +605,8 @@ EXR_LAYERS = (
 
 def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = False,
                   world_specular: bool = False, use_hidden: bool = False,
-                  soften_filters: bool = True, whole_frame: bool = False) -> Dict[str, bool]:
+                  soften_filters: bool = True, whole_frame: bool = False,
+                  scale_read_back: Optional[bool] = None) -> Dict[str, bool]:
     """The Switch nodes' ``check`` for a debug view, whether any reflective
     surface in the frame is rough, whether the second bounce runs, whether
     S is the world colour (Specular Light) times W (``world_specular``: the
@@ -603,14 +615,17 @@ def switch_states(debug_view: str, use_blur: bool = True, use_bounce: bool = Fal
     whether the first blur level is the 3x3 filter, which needs the lift
     (``soften_filters``: host/nodes.soften_is_a_filter), and whether the group
     works on the whole frame (``whole_frame``: a compositor that cannot place a
-    region, host/nodes.compositor_places_regions), where the coarse levels
-    come back through the fine image's Map UV (elsewhere, through
-    ``frame_scale``) and D is not copied into a buffer (elsewhere,
-    ``d_kept``)."""
+    region, host/nodes.compositor_places_regions), where D is not copied into
+    a buffer (elsewhere, ``d_kept``), and whether the coarse levels come back
+    through ``frame_scale`` (``scale_read_back``:
+    host/nodes.coarse_read_back_by_scale; by default where regions are placed)
+    or through the fine image's Map UV."""
+    if scale_read_back is None:
+        scale_read_back = not whole_frame
     states = {"show_reflection": debug_view == "REFLECTION", "show_debug": debug_view in GBUFFER_DEBUG_VIEWS,
               "use_blur": bool(use_blur), "use_bounce": bool(use_bounce), "use_passes": not world_specular,
               "use_hidden": bool(use_hidden),
-              "coarse_by_scale": not whole_frame, "d_buffered": not whole_frame}
+              "coarse_by_scale": bool(scale_read_back), "d_buffered": not whole_frame}
     states.update((name, bool(soften_filters)) for name in SOFTEN_LIFT_SWITCHES)
     return states
 
@@ -780,7 +795,8 @@ def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, in
     offset image that places them (:data:`IMAGE_OFFSET`: dx, dy and the hidden
     box's offset in the region, :func:`hidden_images`) and the coarse levels'
     images (:func:`coarse_images`; ``fine``: the group reads the coarse canvas
-    back through the fine image, on a compositor that cannot place a region)."""
+    back through the fine image, where the host's Scale cannot do it:
+    host/nodes.coarse_read_back_by_scale)."""
     x0, y0, x1, y1 = region
     h, w = np.shape(uv)[:2]
     dx, dy = region_offset(region, w, h)
@@ -796,6 +812,27 @@ def coarse_size(width: int, height: int) -> Tuple[int, int]:
     ``frame_scale`` reads it (Blender's Scale to the render size reads texel
     x x across / width at pixel x; past the last texel it blends with 0)."""
     return width // COARSE + 1, height // COARSE + 1
+
+
+def coarse_grid_shift(width: int, height: int) -> Tuple[float, float]:
+    """The move of ``coarse_grid``, the Translate after the coarse read-back's
+    Scale, on a compositor whose Scale is placed by its domain
+    (host/nodes.scale_reads_by_domain, 5.x), so that
+    frame pixel x reads the coarse canvas at texel x cw / W, as ``frame_scale``
+    reads it on 3.x-4.1 and in this model.
+
+    There a Scale and the Translate after it only transform the canvas's
+    domain, and the Mix that meets the frame samples it once, bilinearly, at
+    u = (x + 0.5 - t) cw / W - 0.5 - c, where c is -0.5 when cw and W differ
+    in parity and 0 otherwise (Blender keeps a canvas centred on the frame's
+    centre; the half-texel c puts an odd canvas's centre texel there). Solved
+    for u = x cw / W: t = 0.5 - (0.5 + c) W / cw, per axis. docs/addon.md,
+    *On 5.2: the Scale read-back placed*."""
+    def axis(size: int, n: int) -> float:
+        c = -0.5 if (n ^ size) & 1 else 0.0
+        return 0.5 - (0.5 + c) * size / n
+    cw, ch = coarse_size(width, height)
+    return axis(int(width), cw), axis(int(height), ch)
 
 
 def _nearest_texels(lo: int, hi: int, size: int, n: int) -> np.ndarray:
@@ -831,9 +868,9 @@ def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int
       the levels there;
     * with ``fine``, :data:`IMAGE_FINE`, region-sized: (u, v) on the coarse
       canvas of the point each pixel reads, the texel coordinates x cw / W and
-      y ch / H, 1, 1: the Map UV read-back of a compositor that cannot place a
-      region, where ``frame_scale`` reads the same points. Without: the
-      compositor reads the canvas back through ``frame_scale``."""
+      y ch / H, 1, 1: the Map UV read-back, for a compositor whose Scale does
+      not read where ``frame_scale`` does (4.2-4.3). Without: the compositor
+      reads the canvas back through ``frame_scale``."""
     x0, y0, x1, y1 = region
     bw, bh = x1 - x0, y1 - y0
     cw, ch = coarse_size(width, height)
@@ -1015,13 +1052,14 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
                    debug_view: str = "NONE", use_blur: bool = True,
                    use_bounce: bool = False, world_specular: bool = False,
                    use_hidden: bool = False, soften_filters: bool = True,
-                   whole_frame: bool = False) -> Dict[str, np.ndarray]:
+                   whole_frame: bool = False, scale_read_back: Optional[bool] = None) -> Dict[str, np.ndarray]:
     """Run :data:`GROUP_NODES` / :data:`GROUP_LINKS` on arrays.
 
     ``soften_filters``: the host runs the first level as the 3x3 filter
     (host/nodes.soften_is_a_filter), else as ``blur`` at SOFTEN_SIGMA, the
     lift's Switches off. ``whole_frame``: the host's group works on the whole
     frame (``images`` frame-sized), and a hidden side's light is the frame.
+    ``scale_read_back``: as :func:`switch_states` takes it.
 
     ``map_uv(image, uv_rgba)`` and ``blur(image, sigma)`` stand in for Blender's
     Map UV and Fast Gaussian (e.g. a bilinear lookup and an exact Gaussian, to
@@ -1045,7 +1083,7 @@ def evaluate_group(base: np.ndarray, images: Dict[str, np.ndarray],
         incoming[(dst, di)] = (src, so)
     cache: Dict[Tuple[str, int], np.ndarray] = {}
     switches = switch_states(debug_view, use_blur, use_bounce, world_specular, use_hidden, soften_filters,
-                             whole_frame)
+                             whole_frame, scale_read_back)
 
     def inp(node, index):
         link = incoming.get((node, index))
@@ -1084,6 +1122,8 @@ def _node_output(node: str, index: int, inp: Callable[[int], object], frame_hw, 
             return _translated(inp(0), dx, dy, np.shape(images[IMAGE_UV])[:2])
         if props["onto"] == "box":
             return _region_of(inp(0), -dx, -dy, np.shape(images[IMAGE_HIDDEN])[:2], frame_hw)
+        if props["onto"] == "grid":  # frame_scale already reads where the host's Scale and this move do
+            return inp(0)
         if props["sign"] < 0:
             return _region_of(inp(0), -dx, -dy, np.shape(images[IMAGE_UV])[:2], frame_hw)
         return _translated(inp(0), dx, dy, frame_hw)
