@@ -218,10 +218,10 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
     levels run (``rough``: some reflective material of the scene is rough),
     whether the second bounce does, whether S is the world colour x W
     (``world_specular``) and whether hidden sides are shown (the frame then
-    fills the hidden image: ``settings.shows_hidden_sides``), the coarse
-    read-back's shift for a ``frame_size`` (width, height) render
-    (cg.coarse_grid_shift, where the host needs one), and the mute of the
-    nodes that only a Switch's dropped side reads."""
+    fills the hidden image: ``settings.shows_hidden_sides``), where the
+    coarse read-back's Scale reads for a ``frame_size`` (width, height) render
+    (cg.coarse_grid_shift or cg.coarse_scale_offset, where the host needs
+    one), and the mute of the nodes that only a Switch's dropped side reads."""
     group = find_group()
     if group is None:
         return
@@ -241,6 +241,9 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
             sock = host_nodes.input_socket(grid, "translate", index)
             if sock.default_value != value:
                 sock.default_value = value
+    scale = group.nodes.get("coarse_to_frame")
+    if scale is not None and host_nodes.scale_offset_places_read() and frame_size is not None:
+        host_nodes.set_scale_offset(scale, *cg.coarse_scale_offset(*frame_size))
     # What only a dropped side of a Switch reads is muted: Blender 5.x
     # computes both sides (cg.dead_nodes).
     dead = cg.dead_nodes(states)

@@ -572,6 +572,21 @@ def test_the_grid_shift_places_a_domain_scale_s_read_on_the_texels_frame_scale_r
         assert np.allclose(u, x * n / size, rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("wh", [(64, 48), (66, 50), (1920, 1080), (1918, 1078), (7, 3), (1, 1)])
+def test_the_scale_offset_places_4_3_s_read_on_the_texels_frame_scale_reads(wh):
+    """4.2-4.3's Scale to the render size reads u = (x + 0.5 - ox W) cw / W - 0.5
+    and v = (y + 0.5 - oy W) ch / H - 0.5 with offsets (ox, oy), both fractions
+    of the frame's width (fitted in Blender 4.3 on random canvases, 64x48 from
+    16x6 and 16x12, 66x50, 480x270 and 1920x1080). coarse_scale_offset's
+    offsets make that frame_scale's texel x cw / W, y ch / H."""
+    w, h = wh
+    cw, ch = cg.coarse_size(w, h)
+    ox, oy = cg.coarse_scale_offset(w, h)
+    x, y = np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64)
+    assert np.allclose((x + 0.5 - ox * w) * cw / w - 0.5, x * cw / w, rtol=0, atol=1e-9)
+    assert np.allclose((y + 0.5 - oy * w) * ch / h - 0.5, y * ch / h, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("hw", [(12, 16), (50, 66), (1, 1)])
 def test_the_coarse_canvas_comes_back_as_blenders_scale_reads_it(hw):
     """frame_scale's model against the read written out (3.4's Scale to the

@@ -6,8 +6,10 @@
   the File Output node;
 * this module: which Blenders were tested, and what the running one is.
 
-Each difference is chosen by a feature test of the running Blender; the
-version number is read only to say, once, that a Blender was not tested.
+Each difference is chosen by a feature test of the running Blender. The
+version number is read to say, once, that a Blender was not tested, and in
+one place where no feature of the API tells two compositors apart: which
+releases a measured behaviour was measured on (nodes.scale_offset_places_read).
 Nothing outside this package knows a Blender version.
 """
 from __future__ import annotations

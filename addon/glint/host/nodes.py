@@ -143,18 +143,38 @@ def scale_reads_by_domain() -> bool:
     ``compositing.coarse_grid_shift`` makes the Scale read the coarse canvas
     where 3.x-4.1's does (checked on 5.2 to 2e-6 at 64x48, 66x50 and 68x52,
     and 7e-5 at 1920x1080; docs/addon.md). 4.4-4.5's compositor may read so
-    too but is untested; 4.2-4.3's reads otherwise (not understood), so those
-    keep the fine image's Map UV. Feature-tested by 5.0's node options as
-    sockets, which came with it on every Blender tested."""
+    too but is untested, so it keeps the fine image's Map UV; 4.2-4.3's Scale
+    reads otherwise and is placed by its own offsets (scale_offset_places_read).
+    Feature-tested by 5.0's node options as sockets, which came with it on
+    every Blender tested."""
     return options_are_sockets()
+
+
+def scale_offset_places_read() -> bool:
+    """Whether the Scale's own offsets place its read where 3.x-4.1's Scale
+    reads (``compositing.coarse_scale_offset``): 4.2-4.3's compositor, which
+    realizes every node's output, so a Translate after the Scale would
+    resample it (docs/addon.md, *On 4.3: ... how its Scale reads*). Measured
+    on 4.3 to 4e-5 at 1920x1080 but for the frame's last row and column. No
+    feature of the API tells this compositor from 4.4-4.5's, which were not
+    measured, so the version range decides; they keep the Map UV."""
+    return (not compositor_places_regions() and not options_are_sockets()
+            and (4, 2) <= tuple(bpy.app.version[:2]) < (4, 4))
 
 
 def coarse_read_back_by_scale() -> bool:
     """Whether the group brings the coarse levels back to the frame through
     its Scale (``frame_scale``; a tenth of a Map UV's cost on 3.4), rather than
-    the fine image's Map UV: where regions are placed, or where the Scale is
-    placed by its domain."""
-    return compositor_places_regions() or scale_reads_by_domain()
+    the fine image's Map UV: where regions are placed, or where the Scale's
+    read can be placed on their grid."""
+    return compositor_places_regions() or scale_reads_by_domain() or scale_offset_places_read()
+
+
+def set_scale_offset(node, x: float, y: float) -> None:
+    """A ``frame_scale`` node's offsets, fractions of the frame's width (only
+    where the options are properties: scale_offset_places_read)."""
+    if (node.offset_x, node.offset_y) != (x, y):
+        node.offset_x, node.offset_y = x, y
 
 
 # Render Layers outputs by pass: 3.4-4.5 short names, 5.0+ words.

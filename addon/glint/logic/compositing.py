@@ -835,6 +835,22 @@ def coarse_grid_shift(width: int, height: int) -> Tuple[float, float]:
     return axis(int(width), cw), axis(int(height), ch)
 
 
+def coarse_scale_offset(width: int, height: int) -> Tuple[float, float]:
+    """The offsets of ``coarse_to_frame`` (the Scale node's X and Y offset,
+    both as fractions of the frame's width) on 4.2-4.3's compositor
+    (host/nodes.scale_offset_places_read), so that frame pixel x reads the
+    coarse canvas at texel x cw / W, as ``frame_scale`` reads it.
+
+    Measured there (docs/addon.md, *On 4.3: what a node costs, and how its
+    Scale reads*): with offsets (ox, oy) pixel (x, y) reads the texel
+    coordinates u = (x + 0.5 - ox W) cw / W - 0.5 and v = (y + 0.5 - oy W)
+    ch / H - 0.5, in one bilinear read. Solved for u = x cw / W and
+    v = y ch / H."""
+    cw, ch = coarse_size(width, height)
+    w, h = float(width), float(height)
+    return 0.5 / w - 0.5 / cw, (0.5 - 0.5 * h / ch) / w
+
+
 def _nearest_texels(lo: int, hi: int, size: int, n: int) -> np.ndarray:
     """For the pixels [lo, hi) of a frame axis of ``size`` pixels, the coarse
     texel (of ``n``) each one's read lies nearest."""
@@ -869,7 +885,7 @@ def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int
     * with ``fine``, :data:`IMAGE_FINE`, region-sized: (u, v) on the coarse
       canvas of the point each pixel reads, the texel coordinates x cw / W and
       y ch / H, 1, 1: the Map UV read-back, for a compositor whose Scale does
-      not read where ``frame_scale`` does (4.2-4.3). Without: the compositor
+      not read where ``frame_scale`` does (4.4-4.5, untested). Without: the compositor
       reads the canvas back through ``frame_scale``."""
     x0, y0, x1, y1 = region
     bw, bh = x1 - x0, y1 - y0
