@@ -1,11 +1,11 @@
 // The pyramid's base level (march_hiz.cpp's base_range()) for x86-64 CPUs
 // with AVX2: eight texels of a row at once, one per lane. Like
 // hiz_walk_avx2.cpp, this file alone is built with -mavx2 and not -mfma, and
-// includes nothing with inline functions of its own, so that no AVX2 copy of
-// a shared function reaches the linker. Each lane does base_range()'s float
-// operations in its order (the min and max operands placed so that ties pick
-// what std::min and std::max pick), so the base is the scalar one bit for
-// bit; the tests hold the two traces equal.
+// includes no inline functions but hiz_lanes_avx2.h's, which are private to
+// it, so that no AVX2 copy of a shared function reaches the linker. Each lane
+// does base_range()'s float operations in its order (the min and max
+// operands placed so that ties pick what std::min and std::max pick), so the
+// base is the scalar one bit for bit; the tests hold the two traces equal.
 //
 // Why: the base is a division and four corner divisions per texel, each
 // waiting on the one before in the scalar loop; at 1920x1080 the base took
@@ -13,23 +13,11 @@
 #include <immintrin.h>
 
 #include "hiz_base.h"
-
-#if !defined(__AVX2__)
-#error "hiz_base_avx2.cpp is built with -mavx2"
-#endif
+#include "hiz_lanes_avx2.h"
 
 namespace glint::cpu {
 namespace {
 
-typedef float VF __attribute__((vector_size(32)));
-typedef int VI __attribute__((vector_size(32)));
-
-__attribute__((always_inline)) inline VF splat(float v) { return VF{v, v, v, v, v, v, v, v}; }
-// Lane k of a where mask m is set, else of b.
-__attribute__((always_inline)) inline VF pick(VI m, VF a, VF b) {
-  return reinterpret_cast<VF>(
-      _mm256_blendv_ps(reinterpret_cast<__m256>(b), reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(m)));
-}
 // (a < b) ? a : b and (a > b) ? a : b, as minps and maxps define them.
 __attribute__((always_inline)) inline VF vmin(VF a, VF b) {
   return reinterpret_cast<VF>(_mm256_min_ps(reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(b)));

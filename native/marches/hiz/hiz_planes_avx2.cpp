@@ -1,10 +1,10 @@
 // The pyramid's plane normals (hiz_planes.cpp's plane_normal()) for x86-64
 // CPUs with AVX2: eight texels of a row at once, one per lane. Like
 // hiz_base_avx2.cpp, this file alone is built with -mavx2 and not -mfma and
-// includes nothing with inline functions of its own. Each lane does
-// plane_normal()'s float operations in its order and picks between its
-// branches with masks, so the normals are the scalar ones bit for bit (the
-// tests compare the two pyramids).
+// includes no inline functions but hiz_lanes_avx2.h's, private to it. Each
+// lane does plane_normal()'s float operations in its order and picks between
+// its branches with masks, so the normals are the scalar ones bit for bit
+// (the tests compare the two pyramids).
 //
 // Why: the scalar rule is a chain of data-dependent branches per texel (which
 // neighbours are seen, which side predicts the depth better), and at
@@ -12,22 +12,11 @@
 #include <immintrin.h>
 
 #include "hiz_base.h"
-
-#if !defined(__AVX2__)
-#error "hiz_planes_avx2.cpp is built with -mavx2"
-#endif
+#include "hiz_lanes_avx2.h"
 
 namespace glint::cpu {
 namespace {
 
-typedef float VF __attribute__((vector_size(32)));
-typedef int VI __attribute__((vector_size(32)));
-
-__attribute__((always_inline)) inline VF splat(float v) { return VF{v, v, v, v, v, v, v, v}; }
-__attribute__((always_inline)) inline VF pick(VI m, VF a, VF b) {
-  return reinterpret_cast<VF>(
-      _mm256_blendv_ps(reinterpret_cast<__m256>(b), reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(m)));
-}
 __attribute__((always_inline)) inline VF vabs(VF v) { return reinterpret_cast<VF>(reinterpret_cast<VI>(v) & 0x7fffffff); }
 
 // Texels x .. x + 7 of an RGBA row as four vectors, one per channel: two
