@@ -40,23 +40,34 @@ __attribute__((always_inline)) inline VI seen_mask(const unsigned char* seen, in
   return reinterpret_cast<VI>(v) != VI{};
 }
 
-// A neighbour as axis_difference() sees it: its position (any value where
-// it is not seen) and whether it is seen.
+// Texels x .. x + 7 of one row as plane_normal() sees them: their positions
+// and whether each is seen (zeros and unseen where the row is off the image:
+// the masks never pick those values).
 struct Side {
   VF p[3];
   VI seen;
 };
+__attribute__((always_inline)) inline Side side_at(const float* row, const unsigned char* seen, int x) {
+  Side s{};
+  if (row) {
+    VF c[4];
+    load_channels(row, x, c);
+    for (int k = 0; k < 3; ++k) s.p[k] = c[k];
+  }
+  s.seen = seen_mask(seen, x);
+  return s;
+}
 
 // miss(): how far the depth this side predicts misses p's; a1 the adjacent
-// texel, a2 the one beyond (its z only).
-__attribute__((always_inline)) inline VF miss(VF pz, const Side& a1, VF a2z, VI a2_seen) {
-  return pick(a2_seen, vabs((splat(2.0f) * a1.p[2] - a2z) - pz), vabs(a1.p[2] - pz));
+// texels, a2 the ones beyond (their z only).
+__attribute__((always_inline)) inline VF miss(VF pz, const Side& a1, const Side& a2) {
+  return pick(a2.seen, vabs((splat(2.0f) * a1.p[2] - a2.p[2]) - pz), vabs(a1.p[2] - pz));
 }
 
 // axis_difference() on the lanes: e, and whether either neighbour is seen.
-__attribute__((always_inline)) inline VI axis_difference(const VF p[3], const Side& lo, VF lo2z, VI lo2_seen,
-                                                         const Side& hi, VF hi2z, VI hi2_seen, VF e[3]) {
-  const VI lower_better = lo.seen & hi.seen & (miss(p[2], lo, lo2z, lo2_seen) < miss(p[2], hi, hi2z, hi2_seen));
+__attribute__((always_inline)) inline VI axis_difference(const VF p[3], const Side& lo, const Side& lo2,
+                                                         const Side& hi, const Side& hi2, VF e[3]) {
+  const VI lower_better = lo.seen & hi.seen & (miss(p[2], lo, lo2) < miss(p[2], hi, hi2));
   const VI use_hi = hi.seen & ~lower_better;
   for (int k = 0; k < 3; ++k) e[k] = pick(use_hi, hi.p[k] - p[k], p[k] - lo.p[k]);
   return hi.seen | lo.seen;
@@ -66,59 +77,24 @@ __attribute__((always_inline)) inline VI axis_difference(const VF p[3], const Si
 
 void hiz_plane_normals_row_avx2(const PlaneRow& r, int x_begin, int x_end) {
   const float* row = r.position[2];
+  const unsigned char* seen = r.seen[2];
   for (int x = x_begin; x + 8 <= x_end; x += 8) {
-    VF c[4];
-    VF p[3];
-    load_channels(row, x, c);
-    for (int k = 0; k < 3; ++k) p[k] = c[k];
-    // Along x: the row's own texels at x - 2 .. x + 2.
-    Side left, right;
-    VF left2z, right2z;
-    load_channels(row, x - 1, c);
-    for (int k = 0; k < 3; ++k) left.p[k] = c[k];
-    load_channels(row, x + 1, c);
-    for (int k = 0; k < 3; ++k) right.p[k] = c[k];
-    load_channels(row, x - 2, c);
-    left2z = c[2];
-    load_channels(row, x + 2, c);
-    right2z = c[2];
-    left.seen = seen_mask(r.seen[2], x - 1);
-    right.seen = seen_mask(r.seen[2], x + 1);
-    const VI left2_seen = seen_mask(r.seen[2], x - 2), right2_seen = seen_mask(r.seen[2], x + 2);
-    // Along y: the same texels of rows y - 2 .. y + 2 (zeros off the image, never picked).
-    Side up, down;
-    VF up2z = {}, down2z = {};
-    for (int k = 0; k < 3; ++k) up.p[k] = down.p[k] = VF{};
-    if (r.position[1]) {
-      load_channels(r.position[1], x, c);
-      for (int k = 0; k < 3; ++k) up.p[k] = c[k];
-    }
-    if (r.position[3]) {
-      load_channels(r.position[3], x, c);
-      for (int k = 0; k < 3; ++k) down.p[k] = c[k];
-    }
-    if (r.position[0]) {
-      load_channels(r.position[0], x, c);
-      up2z = c[2];
-    }
-    if (r.position[4]) {
-      load_channels(r.position[4], x, c);
-      down2z = c[2];
-    }
-    up.seen = seen_mask(r.seen[1], x);
-    down.seen = seen_mask(r.seen[3], x);
-    const VI up2_seen = seen_mask(r.seen[0], x), down2_seen = seen_mask(r.seen[4], x);
-
+    const Side self = side_at(row, seen, x);
+    const VF* p = self.p;
+    // Along x the row's own texels at x - 2 .. x + 2; along y the same texels
+    // of rows y - 2 .. y + 2.
+    VF ex[3], ey[3];
+    const VI has_x = axis_difference(p, side_at(row, seen, x - 1), side_at(row, seen, x - 2),
+                                     side_at(row, seen, x + 1), side_at(row, seen, x + 2), ex);
+    const VI has_y = axis_difference(p, side_at(r.position[1], r.seen[1], x), side_at(r.position[0], r.seen[0], x),
+                                     side_at(r.position[3], r.seen[3], x), side_at(r.position[4], r.seen[4], x), ey);
     VF s[4];
     load_channels(r.normal, x, s);
     const VI finite = (s[0] - s[0] == splat(0.0f)) & (s[1] - s[1] == splat(0.0f)) & (s[2] - s[2] == splat(0.0f));
     const VI nonzero = (s[0] != splat(0.0f)) | (s[1] != splat(0.0f)) | (s[2] != splat(0.0f));
-    VF ex[3], ey[3];
-    const VI has_x = axis_difference(p, left, left2z, left2_seen, right, right2z, right2_seen, ex);
-    const VI has_y = axis_difference(p, up, up2z, up2_seen, down, down2z, down2_seen, ey);
     const VF cr[3] = {ex[1] * ey[2] - ex[2] * ey[1], ex[2] * ey[0] - ex[0] * ey[2], ex[0] * ey[1] - ex[1] * ey[0]};
     const VF len2 = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
-    const VI good = seen_mask(r.seen[2], x) & finite & nonzero & has_x & has_y & (len2 > splat(0.0f)) &
+    const VI good = self.seen & finite & nonzero & has_x & has_y & (len2 > splat(0.0f)) &
                     (len2 - len2 == splat(0.0f));
     VF inv = splat(1.0f) / reinterpret_cast<VF>(_mm256_sqrt_ps(reinterpret_cast<__m256>(len2)));
     inv = pick(s[0] * cr[0] + s[1] * cr[1] + s[2] * cr[2] < splat(0.0f), -inv, inv);
