@@ -1,7 +1,8 @@
 // The hiz march's walks (native/marches/hiz/hiz_walk.h) give the same answers bit
 // for bit: the AVX2 walk, eight rays at once, against the scalar one, on the
-// analytic scene with every option that changes which path a ray takes; and
-// the pyramid built eight texels at a time against the scalar one.
+// analytic scene with every option that changes which path a ray takes; the
+// pyramid built eight texels at a time against the scalar one; and the reuse
+// test's G-buffer half, eight pixels at a time against the scalar one.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -119,6 +120,63 @@ TEST(HizWalk, Avx2PyramidMatchesTheScalarOneBitForBit) {
     ASSERT_EQ(scalar.range.size(), avx2.range.size());
     EXPECT_EQ(std::memcmp(scalar.range.data(), avx2.range.data(), scalar.range.size() * sizeof(float)), 0)
         << w << "x" << h;
+  }
+}
+
+// The reuse test's surface half (hiz_reuse_surface_row()) gives the scalar
+// bytes on every row: widths around the AVX2 rows' edges (10 is the least
+// they take), both row parities and the last row, with and without a
+// specular buffer, and texels that must fail it: unseen, NaN positions,
+// NaN, zero and infinite normals, specular 0, negative or NaN.
+TEST(HizWalk, Avx2ReuseTestMatchesTheScalarOneBitForBit) {
+  if (!cpu::hiz_walk_available(cpu::WalkIsa::Avx2)) GTEST_SKIP() << "this CPU has no AVX2";
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (const auto& size : {std::pair<int, int>{10, 3}, {11, 4}, {18, 5}, {27, 8}, {161, 97}}) {
+    const int w = size.first, h = size.second;
+    const Mat4 proj = perspective(1.0, static_cast<double>(w) / h, 0.1, 100.0);
+    test::Scene scene;
+    scene.planes.push_back({{0, 1, 0}, -1.0, {0.5f, 0.5f, 0.5f}, 1.0f, 1.0f});
+    scene.spheres.push_back({{0.3, -0.2, -4.0}, 0.8, {0.9f, 0.1f, 0.1f}, 1.0f, 1.0f});
+    test::GBuffer g = test::render(scene, proj, w, h);
+    Image specular(w, h);
+    for (size_t t = 0; t < g.position.pixel_count(); ++t) {
+      float* p = g.position.data.data() + 4 * t;
+      float* n = g.normal.data.data() + 4 * t;
+      float* s = specular.data.data() + 4 * t;
+      s[0] = s[1] = s[2] = 0.5f;
+      switch (t % 41) {
+        case 3: p[3] = 0.0f; break;
+        case 5: p[1] = nan; break;
+        case 8: n[0] = nan; break;
+        case 11: n[0] = n[1] = n[2] = 0.0f; break;
+        case 14: n[2] = inf; break;
+        case 17: s[0] = s[1] = s[2] = 0.0f; break;
+        case 19: s[1] = -2.0f; break;
+        case 21: s[2] = nan; break;
+        default: break;
+      }
+    }
+    for (const bool with_specular : {false, true}) {
+      TraceInputs in{g.position, g.normal, with_specular ? &specular : nullptr, g.projection};
+      std::vector<unsigned char> scalar(w), avx2(w);
+      int differ = 0, passed = 0, failed = 0;
+      for (int y = 0; y < h; ++y) {
+        cpu::hiz_reuse_surface_row(in, y, cpu::WalkIsa::Scalar, scalar.data());
+        cpu::hiz_reuse_surface_row(in, y, cpu::WalkIsa::Avx2, avx2.data());
+        for (int x = 0; x < w; ++x) {
+          differ += scalar[x] != avx2[x];
+          const bool second_pass = (y & 1) || (x & 1);
+          passed += second_pass && scalar[x];
+          failed += second_pass && !scalar[x];
+        }
+      }
+      EXPECT_EQ(differ, 0) << w << "x" << h << (with_specular ? " with specular" : "");
+      // Both answers occur, so that equal bytes mean something.
+      if (w * h > 1000) {
+        EXPECT_GT(passed, w * h / 20) << w << "x" << h;
+        EXPECT_GT(failed, w * h / 8) << w << "x" << h;
+      }
+    }
   }
 }
 

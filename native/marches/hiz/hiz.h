@@ -106,6 +106,15 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes,
                              WalkIsa isa);
 
+// With `resolution` <= 0.5 a trace reuses rays (docs/marches.md): the pixels
+// it does not trace first take their neighbours' answers where those lie on
+// their surface and agree. The surface half of that test for every pixel of
+// row y, a byte each (1: the pixel has a ray and its traced neighbours lie on
+// its surface; 0 also for the pixels traced first), into `ok` (a row's
+// width); eight pixels at a time where `isa` is the AVX2 walk's
+// (hiz_base.h), the same bytes.
+void hiz_reuse_surface_row(const TraceInputs& in, int y, WalkIsa isa, unsigned char* ok);
+
 // The whole frame on the CPU, with the walk hiz_walk_default() picks: the
 // `cpu` entry of the march's row (march.cpp).
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);

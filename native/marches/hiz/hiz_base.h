@@ -1,8 +1,9 @@
-// The pyramid's base level and its plane normals, one row at a time, in the
-// form the AVX2 versions (hiz_base_avx2.cpp, hiz_planes_avx2.cpp) take them:
+// The pyramid's base level and its plane normals, and the G-buffer half of
+// the reuse of rays, one row at a time, in the form the AVX2 versions
+// (hiz_base_avx2.cpp, hiz_planes_avx2.cpp, hiz_reuse_avx2.cpp) take them:
 // plain pointers, since those files share no inline code with the rest of
-// the library. march_hiz.cpp's base_range() and hiz_planes.cpp's
-// plane_normal() are the scalar rules and explain them.
+// the library. march_hiz.cpp's base_range() and reuse_surface(), and
+// hiz_planes.cpp's plane_normal(), are the scalar rules and explain them.
 #pragma once
 #include <cstddef>
 
@@ -43,5 +44,25 @@ struct PlaneRow {
 // (the row's neighbours two texels away lie inside). Only where the CPU has
 // AVX2.
 void hiz_plane_normals_row_avx2(const PlaneRow& row, int x_begin, int x_end);
+
+// Row y of the second pass of the reuse of rays: the position, shading
+// normal and specular rows y - 1, y and y + 1 (4 floats a texel, each at the
+// row's first texel; specular null without a specular buffer, every row
+// null where off the image), and a byte per texel out.
+struct ReuseRow {
+  const float* position[3] = {};
+  const float* normal[3] = {};
+  const float* specular[3] = {};
+  int y = 0;
+  float depth_share = 0.0f;  // hiz::kReuseDepth
+  float cos2 = 0.0f;         // hiz::kReuseCos * hiz::kReuseCos
+  unsigned char* out = nullptr;
+};
+
+// reuse_surface() of texels [x_begin, x_end) of the row as bytes (1 true, 0
+// false; 0 for the first pass's texels), bit for bit, eight at a time:
+// x_end - x_begin a multiple of 8, x_begin >= 1, x_end <= width - 1, and on
+// an odd row both rows around it on the image. Only where the CPU has AVX2.
+void hiz_reuse_row_avx2(const ReuseRow& row, int x_begin, int x_end);
 
 }  // namespace glint::cpu

@@ -17,22 +17,6 @@
 namespace glint::cpu {
 namespace {
 
-__attribute__((always_inline)) inline VF vabs(VF v) { return reinterpret_cast<VF>(reinterpret_cast<VI>(v) & 0x7fffffff); }
-
-// Texels x .. x + 7 of an RGBA row as four vectors, one per channel: two
-// 4x4 transposes, one per 128-bit half (texels x .. x + 3 and x + 4 .. x + 7).
-__attribute__((always_inline)) inline void load_channels(const float* row, int x, VF c[4]) {
-  const float* p = row + static_cast<size_t>(x) * 4;
-  __m256 r0 = _mm256_loadu2_m128(p + 16, p), r1 = _mm256_loadu2_m128(p + 20, p + 4);
-  __m256 r2 = _mm256_loadu2_m128(p + 24, p + 8), r3 = _mm256_loadu2_m128(p + 28, p + 12);
-  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
-  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-  c[0] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0x44));
-  c[1] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0xEE));
-  c[2] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0x44));
-  c[3] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0xEE));
-}
-
 // The seen bytes of texels x .. x + 7 as lane masks; none where the row is off the image.
 __attribute__((always_inline)) inline VI seen_mask(const unsigned char* seen, int x) {
   if (!seen) return VI{};

@@ -370,8 +370,8 @@ inline float hit_visibility(float u, float v, float confidence) {
 
 // A queue of pixels for hiz_walk() to trace, and the scalar parts of their
 // walks: each ray's set-up, and the texel test where a lane's walk stops at
-// level 0. `start` answers every pixel it takes: with a neighbour's result
-// (`reuse`), or a miss that the walk's hit overwrites.
+// level 0. `start` answers every pixel it takes: with its neighbours' result
+// (`reusable`), or a miss that the walk's hit overwrites.
 struct PixelQueue {
   const TraceInputs& in;
   const MarchSetup& s;
@@ -379,7 +379,9 @@ struct PixelQueue {
   const HizCamera& cam;
   Image& out;
   int y = 0, x = 0, x_end = 0, x_step = 1;  // pixels (x, y), (x + x_step, y), ... before x_end
-  bool reuse = false;  // answer from the traced neighbours where they agree (reuse_at())
+  // The second pass: the row's reuse_surface() bytes. A pixel that passes is
+  // answered from its traced neighbours where their reports agree.
+  const unsigned char* reusable = nullptr;
   // The outline samples of row y (sample_start()): `per_pixel` rays for each
   // pixel edges[0..), into samples[4 * job].
   const int* edges = nullptr;
@@ -389,7 +391,7 @@ struct PixelQueue {
   float* dst[kWalkLanes] = {};  // where each lane's answer goes
 };
 
-bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4]);
+bool reuse_reports(const TraceInputs& in, const Image& out, int x, int y, float o[4]);
 
 // The walk of ray r from pixel (x, y): it leaves the origin's own texel
 // first, since the ray starts on that texel's surface.
@@ -406,7 +408,7 @@ bool queue_start(void* ctx, int lane, WalkRay& w) {
     const int x = q.x, y = q.y;
     q.x += q.x_step;
     float* o = q.out.px(x, y);
-    if (q.reuse && reuse_at(q.in, q.out, x, y, o)) continue;
+    if (q.reusable && q.reusable[x] && reuse_reports(q.in, q.out, x, y, o)) continue;
     o[0] = o[1] = o[2] = o[3] = 0.0f;
     if (q.in.specular && !is_reflective(q.in.specular->px(x, y))) continue;
     Ray& r = q.ray[lane];
@@ -550,47 +552,92 @@ inline int report_kind(const float* o) { return o[3] > 0.0f ? 1 : (o[3] == 0.0f 
 
 // Whether the texel under uv b lies on the plane of the texel under uv a:
 // both seen, normals within kReuseCos, b off a's plane by at most
-// kReuseDepth of a's view distance.
-bool on_plane_of(const TraceInputs& in, const float* a, const float* b) {
+// kReuseDepth of a's view distance. In two steps, since one a is held
+// against up to four b: plane_at() takes a's texel, on_plane_of() each b.
+struct PlaneAt {
+  const float *p = nullptr, *n = nullptr;
+  float limit = 0.0f;  // the distance off the plane allowed, times |n|
+};
+bool plane_at(const TraceInputs& in, const float* a, PlaneAt& pl) {
   const Image& pos = in.position;
-  const float w = static_cast<float>(pos.width), h = static_cast<float>(pos.height);
-  int ia = 0, ja = 0, ib = 0, jb = 0;
-  if (!pos.texel_at(a[0] * w, a[1] * h, ia, ja) || !pos.texel_at(b[0] * w, b[1] * h, ib, jb)) return false;
-  const float *pa = pos.px(ia, ja), *pb = pos.px(ib, jb);
-  if (!texel_seen(pa) || !texel_seen(pb)) return false;
-  const float *na = in.normal.px(ia, ja), *nb = in.normal.px(ib, jb);
-  if (!normals_agree(na, nb)) return false;
+  int i = 0, j = 0;
+  if (!pos.texel_at(a[0] * static_cast<float>(pos.width), a[1] * static_cast<float>(pos.height), i, j)) return false;
+  pl.p = pos.px(i, j);
+  if (!texel_seen(pl.p)) return false;
+  pl.n = in.normal.px(i, j);
+  const float* n = pl.n;
+  pl.limit = hiz::kReuseDepth * std::fabs(pl.p[2]) * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  return true;
+}
+bool on_plane_of(const TraceInputs& in, const PlaneAt& pl, const float* b) {
+  const Image& pos = in.position;
+  int i = 0, j = 0;
+  if (!pos.texel_at(b[0] * static_cast<float>(pos.width), b[1] * static_cast<float>(pos.height), i, j)) return false;
+  const float* pb = pos.px(i, j);
+  if (!texel_seen(pb)) return false;
+  const float *pa = pl.p, *na = pl.n;
+  if (!normals_agree(na, in.normal.px(i, j))) return false;
   const float g = na[0] * (pb[0] - pa[0]) + na[1] * (pb[1] - pa[1]) + na[2] * (pb[2] - pa[2]);
-  return std::fabs(g) <= hiz::kReuseDepth * std::fabs(pa[2]) * std::sqrt(na[0] * na[0] + na[1] * na[1] + na[2] * na[2]);
+  return std::fabs(g) <= pl.limit;
 }
 
-// Whether the traced neighbours q[0..k) of pixel (x, y) say what its own ray
-// would find (docs/marches.md, "Reusing neighbours' rays"): each lies on the
-// same smooth surface (reflective, normals within kReuseCos, view distances
-// within kReuseDepth of each other), and either all missed or all hit within
-// kReusePixels of each other, or all hit (real hits, not occluders) within
-// kReuseSpanPixels on one plane (on_plane_of() from the first hit's texel
-// to each other's and to their mean's) with visibilities within
-// kReuseSpanVisibility. Then `out` is their miss, or their
-// hits' mean uv with each channel's least visibility (with blocked=occluder
-// an occluder, 0 in the 4th channel, counts as a hit) when they are of one
-// kind (report_kind()); the mean visibility when they are on one plane
-// further apart. False also where the pixel itself is not reflective: its
-// own trace writes its 0 then.
-bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, const int (*q)[2], int k,
-                      float o[4]) {
+// The traced pixels that pixel (x, y) of the second pass reads, into q: the
+// two beside it (an even row), the two above and below (an odd row, even
+// column), or the four at its corners. Returns how many.
+int reuse_neighbours_of(int x, int y, int q[4][2]) {
+  if (!(y & 1)) {
+    q[0][0] = x - 1, q[0][1] = y, q[1][0] = x + 1, q[1][1] = y;
+    return 2;
+  }
+  if (!(x & 1)) {
+    q[0][0] = x, q[0][1] = y - 1, q[1][0] = x, q[1][1] = y + 1;
+    return 2;
+  }
+  q[0][0] = x - 1, q[0][1] = y - 1, q[1][0] = x + 1, q[1][1] = y - 1;
+  q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1;
+  return 4;
+}
+
+// Whether the traced neighbours of pixel (x, y) (reuse_neighbours_of()) say
+// what its own ray would find (docs/marches.md, "Reusing neighbours' rays").
+// It takes two halves: reuse_surface() reads only the G-buffer, so a row's
+// answers can be had in one sweep (eight pixels at a time on AVX2), and
+// reuse_reports() reads the first pass's reports for the pixels that pass.
+//
+// reuse_surface(): each neighbour lies on the image and on the pixel's smooth
+// surface (reflective, normals within kReuseCos, view distances within
+// kReuseDepth of each other: same_surface()). False also where the pixel
+// itself is not reflective or has no ray: its own trace writes its 0 then.
+bool reuse_surface(const TraceInputs& in, int x, int y) {
   if (in.specular && !is_reflective(in.specular->px(x, y))) return false;
   const float* p = in.position.px(x, y);
   const float* n = in.normal.px(x, y);
   // Only where the pixel's own ray exists (read_origin() would take it).
   if (!texel_seen(p) || !finite(V3{p[0], p[1], p[2]}) || !finite(V3{n[0], n[1], n[2]})) return false;
-  int hits = 0;
+  int q[4][2];
+  const int k = reuse_neighbours_of(x, y, q);
   for (int e = 0; e < k; ++e) {
     const int qx = q[e][0], qy = q[e][1];
-    if (qx < 0 || qy < 0 || qx >= out.width || qy >= out.height) return false;
+    if (qx < 0 || qy < 0 || qx >= in.position.width || qy >= in.position.height) return false;
     if (!same_surface(in, p, n, qx, qy)) return false;
-    if (out.px(qx, qy)[2] > 0.0f) ++hits;
   }
+  return true;
+}
+
+// reuse_reports(), for a pixel whose neighbours passed reuse_surface(): they
+// either all missed or all hit within kReusePixels of each other, or all hit
+// (real hits, not occluders) within kReuseSpanPixels on one plane
+// (on_plane_of() from the first hit's texel to each other's and to their
+// mean's) with visibilities within kReuseSpanVisibility. Then `o` is their
+// miss, or their hits' mean uv with each channel's least visibility (with
+// blocked=occluder an occluder, 0 in the 4th channel, counts as a hit) when
+// they are of one kind (report_kind()); the mean visibility when they are on
+// one plane further apart.
+bool reuse_reports(const TraceInputs& in, const Image& out, int x, int y, float o[4]) {
+  int q[4][2];
+  const int k = reuse_neighbours_of(x, y, q);
+  int hits = 0;
+  for (int e = 0; e < k; ++e) hits += out.px(q[e][0], q[e][1])[2] > 0.0f;
   if (hits == 0) {
     o[0] = o[1] = o[2] = o[3] = 0.0f;
     return true;
@@ -623,10 +670,11 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   const float mean[2] = {su * inv_k, sv * inv_k};
   if (wide) {
     if (!(vis_max - vis <= kReuseSpanVisibility)) return false;
-    const float* h0 = out.px(q[0][0], q[0][1]);
+    PlaneAt first;
+    if (!plane_at(in, out.px(q[0][0], q[0][1]), first)) return false;
     for (int a = 1; a < k; ++a)
-      if (!on_plane_of(in, h0, out.px(q[a][0], q[a][1]))) return false;
-    if (!on_plane_of(in, h0, mean)) return false;
+      if (!on_plane_of(in, first, out.px(q[a][0], q[a][1]))) return false;
+    if (!on_plane_of(in, first, mean)) return false;
   }
   o[0] = mean[0];
   o[1] = mean[1];
@@ -637,23 +685,6 @@ bool reuse_neighbours(const TraceInputs& in, const Image& out, int x, int y, con
   o[2] = wide ? vis_sum * inv_k : vis;
   o[3] = wide ? o[2] : found;
   return true;
-}
-
-// reuse_neighbours() for pixel (x, y) of the second pass, from the traced
-// pixels around it: the two beside it in its row (an even row), the two
-// above and below (an odd row, even column), or the four at its corners.
-bool reuse_at(const TraceInputs& in, const Image& out, int x, int y, float o[4]) {
-  int q[4][2];
-  int k;
-  if (!(y & 1)) {
-    q[0][0] = x - 1, q[0][1] = y, q[1][0] = x + 1, q[1][1] = y, k = 2;
-  } else if (!(x & 1)) {
-    q[0][0] = x, q[0][1] = y - 1, q[1][0] = x, q[1][1] = y + 1, k = 2;
-  } else {
-    q[0][0] = x - 1, q[0][1] = y - 1, q[1][0] = x + 1, q[1][1] = y - 1;
-    q[2][0] = x - 1, q[2][1] = y + 1, q[3][0] = x + 1, q[3][1] = y + 1, k = 4;
-  }
-  return reuse_neighbours(in, out, x, y, q, k, o);
 }
 
 // --- Antialiased outlines (docs/marches.md) --------------------------------
@@ -706,6 +737,39 @@ bool sample_start(void* ctx, int lane, WalkRay& w) {
 
 }  // namespace
 
+// The AVX2 rows take the row's texels but its first and last, the row's ends
+// go one at a time.
+void hiz_reuse_surface_row(const TraceInputs& in, int y, WalkIsa isa, unsigned char* ok) {
+  const int w = in.position.width, h = in.position.height;
+  int x0 = 0, x1 = 0;  // [x0, x1): done eight at a time
+#if defined(GLINT_WALK_AVX2)
+  if (isa == WalkIsa::Avx2 && w >= 10 && (!(y & 1) || y + 1 < h)) {
+    ReuseRow r;
+    for (int k = 0; k < 3; ++k) {
+      const int row = y - 1 + k;
+      if (row < 0 || row >= h) continue;
+      r.position[k] = in.position.px(0, row);
+      r.normal[k] = in.normal.px(0, row);
+      r.specular[k] = in.specular ? in.specular->px(0, row) : nullptr;
+    }
+    r.y = y;
+    r.depth_share = hiz::kReuseDepth;
+    r.cos2 = hiz::kReuseCos * hiz::kReuseCos;
+    r.out = ok;
+    x0 = 1;
+    x1 = 1 + (w - 2) / 8 * 8;
+    hiz_reuse_row_avx2(r, x0, x1);
+  }
+#else
+  (void)isa;
+#endif
+  for (int x = 0; x < w; ++x) {
+    if (x == x0 && x1 > x0) x = x1;
+    if (x >= w) break;
+    ok[x] = (y & 1) || (x & 1) ? reuse_surface(in, x, y) : 0;
+  }
+}
+
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
   return trace_hiz(in, opt, threads, hiz_walk_default());
 }
@@ -742,7 +806,12 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
     q.x = x0;
     q.x_end = out.width;
     q.x_step = step;
-    q.reuse = reuse;
+    std::vector<unsigned char> reusable;
+    if (reuse) {
+      reusable.resize(static_cast<size_t>(out.width));
+      hiz_reuse_surface_row(in, y, isa, reusable.data());
+      q.reusable = reusable.data();
+    }
     WalkHost host;
     host.ctx = &q;
     host.start = queue_start;

@@ -1,6 +1,6 @@
 #version 430 core
-// The hiz march's reuse of rays (trace_hiz() and reuse_neighbours() in
-// march_hiz.cpp, same tests on the same values): after
+// The hiz march's reuse of rays (trace_hiz(), reuse_surface() and
+// reuse_reports() in march_hiz.cpp, same tests on the same values): after
 // trace_hiz.frag traced every other pixel of every other row into u_coarse,
 // an invocation per 2x2 quad of the frame. Its traced corner pixel is copied;
 // each other pixel takes what its traced neighbours agree on, and where they
@@ -49,7 +49,7 @@ Traced traced(ivec2 q) {
   return t;
 }
 
-// The per-neighbour half of reuse_neighbours(): q lies on the pixel's smooth
+// The per-neighbour half of reuse_surface(): q lies on the pixel's smooth
 // surface (p, n, nn = |n|^2).
 // normals_agree() in cpu/outline.h: normals n (|n|^2 = nn) and m lie within
 // REUSE_COS of each other.
@@ -102,10 +102,11 @@ bool on_plane_of(vec2 a, vec2 b) {
   return abs(g) <= lim;
 }
 
-// reuse_neighbours() for the pixel at c, its k = 2 or 4 traced neighbours
-// q0..q3 (q2, q3 unused when k = 2), written out without arrays: a SIMD
-// compiler such as llvmpipe's keeps a loop-indexed local array in memory,
-// one gather per lane and access, which cost this pass most of its time.
+// reuse_surface() and reuse_reports() for the pixel at c, its k = 2 or 4
+// traced neighbours q0..q3 (q2, q3 unused when k = 2), written out without
+// arrays: a SIMD compiler such as llvmpipe's keeps a loop-indexed local array
+// in memory, one gather per lane and access, which cost this pass most of
+// its time.
 bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k, out vec4 o) {
   o = vec4(0.0);
   vec4 p = imageLoad(u_position_img, c);
@@ -119,7 +120,7 @@ bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k
   if (k == 4) hits += (q2.r.z > 0.0 ? 1 : 0) + (q3.r.z > 0.0 ? 1 : 0);
   if (hits == 0) return true;
   if (hits < k) return false;
-  // One kind of report (reuse_neighbours() in march_hiz.cpp says why).
+  // One kind of report (reuse_reports() in march_hiz.cpp says why).
   int kind = report_kind(q0.r);
   if (report_kind(q1.r) != kind) return false;
   if (k == 4 && (report_kind(q2.r) != kind || report_kind(q3.r) != kind)) return false;
