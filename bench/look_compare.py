@@ -31,8 +31,8 @@ a checkout after building:
       [--cycles-cache DIR] [--arrays DIR] [--digits 2]
 
 --arrays DIR writes each scene's linear frames, differences, pixel masks and Glint's
-last G-buffer and layers (uv, weight) to DIR/<scene>.npz, for finding where an error
-comes from.
+last G-buffer, layers (uv, weight) and projection to DIR/<scene>.npz, for finding where
+an error comes from (glint_core.trace reruns the march from them).
 --digits N prints strength and error with N decimals (3 to tell two changes apart).
 --cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
 scene, size, samples, Blender and the code that makes the frames are the same: Cycles is
@@ -471,7 +471,7 @@ def run_scene(name, opts, state, tmp):
                             cycles_frame=cycles_frame, **{f"{m}_frame": frames[m] for m in modes},
                             **{f"{m}_diff": diffs[m] for m in METHODS},
                             **{f"glint_{k}": np.asarray(state.arrays[k]) for k in ("uv", "weight", "position",
-                                                                                  "normal", "specular")
+                                                                                  "normal", "specular", "projection")
                                if k in state.arrays})
     info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
                 noise=noise, cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
