@@ -97,6 +97,10 @@ TEST(HizWalk, Avx2PyramidMatchesTheScalarOneBitForBit) {
       if (kind == 1) n[0] = nan;
       if (kind == 2) n[0] = n[1] = n[2] = 0.0f;
       if (kind == 3) n[2] = inf;
+      // And positions the seen flags must turn away: NaN, infinite, w <= 0.
+      float* p = g.position.data.data() + 4 * static_cast<size_t>(k);
+      if (kind == 4) p[(k / 35) % 4] = (k / 140) % 2 ? nan : inf;
+      if (kind == 0 && (k / 35) % 3 == 1) p[3] = -1.0f;
     }
     const cpu::HizCamera cam = cpu::hiz_camera(g.projection);
     cpu::HizPlanes planes_scalar, planes_avx2;

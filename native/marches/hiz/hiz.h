@@ -74,13 +74,14 @@ struct HizPlanes {
 
 // Whether each texel of rows [y0, y0 + rows) is seen (texel_seen()), a byte
 // each: the plane normals ask it of up to eight neighbours per texel, and
-// the base of each texel, so a block of rows asks each texel once.
+// the base of each texel, so a block of rows asks each texel once. Eight
+// texels at a time where `isa` is the AVX2 walk's (hiz_base.h).
 struct SeenRows {
   int y0 = 0, width = 0;
   std::vector<unsigned char> bytes;
   bool at(int x, int y) const { return bytes[static_cast<size_t>(y - y0) * width + x] != 0; }
 };
-void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out);
+void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out, WalkIsa isa);
 
 // The normal of each texel's tangent plane, for the pyramid's base and the
 // texel test (never the ray's direction, which follows the shading normal):

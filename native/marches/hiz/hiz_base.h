@@ -39,6 +39,11 @@ struct PlaneRow {
   float* out = nullptr;
 };
 
+// texel_seen() of texels [0, n) of a position row (4 floats a texel) as bytes
+// (1 seen, 0 not), eight at a time: n a multiple of 8. Only where the CPU has
+// AVX2.
+void hiz_seen_row_avx2(const float* position, int n, unsigned char* out);
+
 // plane_normal() of texels [x_begin, x_end) of the row, bit for bit, eight at
 // a time: x_end - x_begin a multiple of 8, and x_begin >= 2, x_end <= width - 2
 // (the row's neighbours two texels away lie inside). Only where the CPU has

@@ -72,15 +72,25 @@ void plane_normal(const Image& position, const Image& normal, const SeenRows& se
 
 }  // namespace
 
-void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out) {
+void fill_seen_rows(const Image& position, int y0, int y1, SeenRows& out, WalkIsa isa) {
   out.y0 = y0;
   out.width = position.width;
   out.bytes.resize(static_cast<size_t>(y1 - y0) * position.width);
-  // texel_seen() with & for &&: no branch per test, so the row vectorises.
   for (int y = y0; y < y1; ++y) {
     const float* p = position.px(0, y);
     unsigned char* o = out.bytes.data() + static_cast<size_t>(y - y0) * position.width;
-    for (int x = 0; x < position.width; ++x) {
+    int x = 0;
+#if defined(GLINT_WALK_AVX2)
+    if (isa == WalkIsa::Avx2) {
+      x = position.width / 8 * 8;
+      hiz_seen_row_avx2(p, x, o);
+    }
+#else
+    (void)isa;
+#endif
+    // texel_seen() with & for &&: no branch per test (the baseline compiler
+    // did not vectorise it all the same: hence the AVX2 rows).
+    for (; x < position.width; ++x) {
       const float* q = p + static_cast<size_t>(x) * 4;
       o[x] = (q[3] > 0.0f) & (q[0] - q[0] == 0.0f) & (q[1] - q[1] == 0.0f) & (q[2] - q[2] == 0.0f) &
              (q[3] - q[3] == 0.0f);

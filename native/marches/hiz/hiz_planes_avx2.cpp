@@ -93,4 +93,17 @@ void hiz_plane_normals_row_avx2(const PlaneRow& r, int x_begin, int x_end) {
   }
 }
 
+void hiz_seen_row_avx2(const float* position, int n, unsigned char* out) {
+  for (int x = 0; x + 8 <= n; x += 8) {
+    VF c[4];
+    load_channels(position, x, c);
+    const VI seen = (c[3] > splat(0.0f)) & (c[0] - c[0] == splat(0.0f)) & (c[1] - c[1] == splat(0.0f)) &
+                    (c[2] - c[2] == splat(0.0f)) & (c[3] - c[3] == splat(0.0f));
+    // Lanes 0/-1 to bytes 0/1, in lane order.
+    const __m256i one = reinterpret_cast<__m256i>(seen & 1);
+    const __m128i words = _mm_packs_epi32(_mm256_castsi256_si128(one), _mm256_extracti128_si256(one, 1));
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out + x), _mm_packus_epi16(words, words));
+  }
+}
+
 }  // namespace glint::cpu

@@ -491,7 +491,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
   parallel_rows(0, (height + kBlock - 1) / kBlock, threads, [&](int b) {
     const int y0 = b * kBlock, y1 = std::min(height, y0 + kBlock);
     SeenRows seen;
-    fill_seen_rows(position, std::max(0, y0 - 2), std::min(height, y1 + 2), seen);
+    fill_seen_rows(position, std::max(0, y0 - 2), std::min(height, y1 + 2), seen, isa);
     for (int y = y0; y < y1; ++y) {
       hiz_plane_normals_row(position, normal, seen, y, planes, isa);
       float* row = p.range.data() + static_cast<size_t>(y) * position.width * 2;
