@@ -522,7 +522,22 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
     parallel_rows(0, p.height[l], threads, [&](int j) {
       // The last cell of a row or column also takes what an odd size leaves.
       const int y0 = 2 * j, y1 = j == p.height[l] - 1 ? ph - 1 : std::min(2 * j + 1, ph - 1);
-      for (int i = 0; i < p.width[l]; ++i) {
+      int i = 0;
+      if (y1 == y0 + 1) {
+        // Whole 2x2 blocks: the general loop's comparisons in its order,
+        // without its per-cell bounds and loops (a fifth of its instructions
+        // at 1080p).
+        const float* r0 = p.cell(l - 1, 0, y0);
+        const float* r1 = p.cell(l - 1, 0, y1);
+        float* o = p.cell(l, 0, j);
+        for (; i < p.width[l] - 1 && 2 * i + 1 < pw; ++i) {
+          const float* a = r0 + 4 * i;
+          const float* b = r1 + 4 * i;
+          o[2 * i] = std::min(std::min(std::min(std::min(kInf, a[0]), a[2]), b[0]), b[2]);
+          o[2 * i + 1] = std::max(std::max(std::max(std::max(-kInf, a[1]), a[3]), b[1]), b[3]);
+        }
+      }
+      for (; i < p.width[l]; ++i) {
         const int x0 = 2 * i, x1 = i == p.width[l] - 1 ? pw - 1 : std::min(2 * i + 1, pw - 1);
         float lo = kInf, hi = -kInf;
         for (int yy = y0; yy <= y1; ++yy)
