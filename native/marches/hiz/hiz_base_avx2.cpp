@@ -25,7 +25,6 @@ __attribute__((always_inline)) inline VF vmin(VF a, VF b) {
 __attribute__((always_inline)) inline VF vmax(VF a, VF b) {
   return reinterpret_cast<VF>(_mm256_max_ps(reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(b)));
 }
-__attribute__((always_inline)) inline VI finite(VF v) { return (v - v) == splat(0.0f); }
 
 }  // namespace
 
@@ -58,7 +57,7 @@ int hiz_base_row_avx2(const BaseRow& a) {
     // texel_thickness(): the back layer's where it is seen and behind.
     VF t = splat(a.thickness);
     if (a.back) {
-      const VI back_seen = (b[3] > zero) & finite(b[0]) & finite(b[1]) & finite(b[2]) & finite(b[3]);
+      const VI back_seen = texel_seen(b);
       const VF kt = pick(back_seen & (-b[2] > d), -b[2] - d, splat(-1.0f));
       t = pick(kt > zero, kt, t);
     }

@@ -23,6 +23,13 @@ __attribute__((always_inline)) inline VF pick(VI m, VF a, VF b) {
       _mm256_blendv_ps(reinterpret_cast<__m256>(b), reinterpret_cast<__m256>(a), reinterpret_cast<__m256>(m)));
 }
 
+// finite() and texel_seen() of glint's headers, on the lanes: v - v == 0,
+// and w > 0 with every channel finite (p: the four channels of a texel row).
+__attribute__((always_inline)) inline VI finite(VF v) { return (v - v) == splat(0.0f); }
+__attribute__((always_inline)) inline VI texel_seen(const VF p[4]) {
+  return (p[3] > splat(0.0f)) & finite(p[0]) & finite(p[1]) & finite(p[2]) & finite(p[3]);
+}
+
 __attribute__((always_inline)) inline VF vabs(VF v) { return reinterpret_cast<VF>(reinterpret_cast<VI>(v) & 0x7fffffff); }
 
 // Texels x .. x + 7 of an RGBA row as four vectors, one per channel: two

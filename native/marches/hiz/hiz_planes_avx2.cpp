@@ -74,11 +74,11 @@ void hiz_plane_normals_row_avx2(const PlaneRow& r, int x_begin, int x_end) {
                                      side_at(r.position[3], r.seen[3], x), side_at(r.position[4], r.seen[4], x), ey);
     VF s[4];
     load_channels(r.normal, x, s);
-    const VI finite = (s[0] - s[0] == splat(0.0f)) & (s[1] - s[1] == splat(0.0f)) & (s[2] - s[2] == splat(0.0f));
+    const VI finite_normal = finite(s[0]) & finite(s[1]) & finite(s[2]);
     const VI nonzero = (s[0] != splat(0.0f)) | (s[1] != splat(0.0f)) | (s[2] != splat(0.0f));
     const VF cr[3] = {ex[1] * ey[2] - ex[2] * ey[1], ex[2] * ey[0] - ex[0] * ey[2], ex[0] * ey[1] - ex[1] * ey[0]};
     const VF len2 = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
-    const VI good = self.seen & finite & nonzero & has_x & has_y & (len2 > splat(0.0f)) &
+    const VI good = self.seen & finite_normal & nonzero & has_x & has_y & (len2 > splat(0.0f)) &
                     (len2 - len2 == splat(0.0f));
     VF inv = splat(1.0f) / reinterpret_cast<VF>(_mm256_sqrt_ps(reinterpret_cast<__m256>(len2)));
     inv = pick(s[0] * cr[0] + s[1] * cr[1] + s[2] * cr[2] < splat(0.0f), -inv, inv);
@@ -97,10 +97,8 @@ void hiz_seen_row_avx2(const float* position, int n, unsigned char* out) {
   for (int x = 0; x + 8 <= n; x += 8) {
     VF c[4];
     load_channels(position, x, c);
-    const VI seen = (c[3] > splat(0.0f)) & (c[0] - c[0] == splat(0.0f)) & (c[1] - c[1] == splat(0.0f)) &
-                    (c[2] - c[2] == splat(0.0f)) & (c[3] - c[3] == splat(0.0f));
     // Lanes 0/-1 to bytes 0/1, in lane order.
-    const __m256i one = reinterpret_cast<__m256i>(seen & 1);
+    const __m256i one = reinterpret_cast<__m256i>(texel_seen(c) & 1);
     const __m128i words = _mm_packs_epi32(_mm256_castsi256_si128(one), _mm256_extracti128_si256(one, 1));
     _mm_storel_epi64(reinterpret_cast<__m128i*>(out + x), _mm_packus_epi16(words, words));
   }

@@ -4,7 +4,7 @@
 // -mavx2 and not -mfma and includes no inline functions but
 // hiz_lanes_avx2.h's. Each lane does the scalar test's float operations in its
 // order, so the bytes are the scalar ones bit for bit (test_hiz_walk compares
-// whole traces).
+// the two paths' bytes row by row).
 //
 // Why: three pixels in four of a balanced trace are answered by this test,
 // each against two or four neighbours. As a loop of branches per neighbour it
@@ -17,8 +17,6 @@
 
 namespace glint::cpu {
 namespace {
-
-__attribute__((always_inline)) inline VI finite(VF v) { return v - v == splat(0.0f); }
 
 // Texels x .. x + 7 of one of the rows: position, shading normal, and
 // whether each reflects (every lane where there is no specular buffer).
@@ -41,18 +39,13 @@ __attribute__((always_inline)) inline Texels texels_at(const ReuseRow& r, int ro
   return t;
 }
 
-// texel_seen() of the positions.
-__attribute__((always_inline)) inline VI seen(const Texels& t) {
-  return (t.p[3] > splat(0.0f)) & finite(t.p[0]) & finite(t.p[1]) & finite(t.p[2]) & finite(t.p[3]);
-}
-
 // same_surface() of neighbour q against the pixel c, with normals_agree().
 __attribute__((always_inline)) inline VI same(const ReuseRow& r, const Texels& c, const Texels& q) {
   const VI near = vabs(q.p[2] - c.p[2]) <= splat(r.depth_share) * vabs(c.p[2]);
   const VF nn = c.n[0] * c.n[0] + c.n[1] * c.n[1] + c.n[2] * c.n[2];
   const VF d = c.n[0] * q.n[0] + c.n[1] * q.n[1] + c.n[2] * q.n[2];
   const VF mm = q.n[0] * q.n[0] + q.n[1] * q.n[1] + q.n[2] * q.n[2];
-  return q.reflective & seen(q) & near & (d > splat(0.0f)) & (d * d >= splat(r.cos2) * nn * mm);
+  return q.reflective & texel_seen(q.p) & near & (d > splat(0.0f)) & (d * d >= splat(r.cos2) * nn * mm);
 }
 
 }  // namespace
@@ -62,7 +55,7 @@ void hiz_reuse_row_avx2(const ReuseRow& r, int x_begin, int x_end) {
   for (int x = x_begin; x + 8 <= x_end; x += 8) {
     const Texels c = texels_at(r, 1, x);
     // The pixel's own ray exists (read_origin() would take it).
-    const VI valid = c.reflective & seen(c) & finite(c.n[0]) & finite(c.n[1]) & finite(c.n[2]);
+    const VI valid = c.reflective & texel_seen(c.p) & finite(c.n[0]) & finite(c.n[1]) & finite(c.n[2]);
     const VI lane = VI{0, 1, 2, 3, 4, 5, 6, 7} + x;
     const VI odd_x = (lane & 1) != 0;
     VI ok;

@@ -530,7 +530,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
         const float* r0 = p.cell(l - 1, 0, y0);
         const float* r1 = p.cell(l - 1, 0, y1);
         float* o = p.cell(l, 0, j);
-        for (; i < p.width[l] - 1 && 2 * i + 1 < pw; ++i) {
+        for (; i < p.width[l] - 1; ++i) {
           const float* a = r0 + 4 * i;
           const float* b = r1 + 4 * i;
           o[2 * i] = std::min(std::min(std::min(std::min(kInf, a[0]), a[2]), b[0]), b[2]);
@@ -778,11 +778,9 @@ void hiz_reuse_surface_row(const TraceInputs& in, int y, WalkIsa isa, unsigned c
 #else
   (void)isa;
 #endif
-  for (int x = 0; x < w; ++x) {
-    if (x == x0 && x1 > x0) x = x1;
-    if (x >= w) break;
-    ok[x] = (y & 1) || (x & 1) ? reuse_surface(in, x, y) : 0;
-  }
+  auto one = [&](int x) { ok[x] = (y & 1) || (x & 1) ? reuse_surface(in, x, y) : 0; };
+  for (int x = 0; x < x0; ++x) one(x);
+  for (int x = x1; x < w; ++x) one(x);
 }
 
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads) {
