@@ -1,8 +1,9 @@
 // The hiz march's walks (native/marches/hiz/hiz_walk.h) give the same answers bit
 // for bit: the AVX2 walk, eight rays at once, against the scalar one, on the
 // analytic scene with every option that changes which path a ray takes; the
-// pyramid built eight texels at a time against the scalar one; and the reuse
-// test's G-buffer half, eight pixels at a time against the scalar one.
+// pyramid built eight texels at a time against the scalar one; the reuse
+// test's G-buffer half and the pixels' own rays, eight pixels at a time
+// against the scalar ones.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,9 +11,11 @@
 #include <limits>
 
 #include "analytic_scene.h"
+#include "cpu/march.h"
 #include "glint/marches.h"
 #include "glint/stages.h"
 #include "hiz/hiz.h"
+#include "hiz/hiz_base.h"
 
 using namespace glint;
 
@@ -179,6 +182,75 @@ TEST(HizWalk, Avx2ReuseTestMatchesTheScalarOneBitForBit) {
       if (w * h > 1000) {
         EXPECT_GT(passed, w * h / 20) << w << "x" << h;
         EXPECT_GT(failed, w * h / 8) << w << "x" << h;
+      }
+    }
+  }
+}
+
+// The pixels' own rays (hiz_pixel_rays()) are the scalar ones bit for bit:
+// both cameras and the eye of a general projective one, rows whose length is
+// not a multiple of 8, a sphere just past the near plane whose rays come back
+// toward the camera and are cut short there, lengths from 0.05 to 1e7, and
+// texels that have no ray: unseen, NaN or infinite positions, a position at
+// the eye, NaN, zero and infinite normals.
+TEST(HizWalk, Avx2PixelRaysMatchTheScalarOnesBitForBit) {
+  if (!cpu::hiz_walk_available(cpu::WalkIsa::Avx2)) GTEST_SKIP() << "this CPU has no AVX2";
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (const auto& size : {std::pair<int, int>{13, 7}, {161, 97}}) {
+    for (const bool ortho : {false, true}) {
+      const int w = size.first, h = size.second;
+      const Mat4 proj = ortho ? orthographic(4.0 * w / h, 4.0, 0.1, 100.0)
+                              : perspective(1.0, static_cast<double>(w) / h, 0.1, 100.0);
+      test::Scene scene;
+      scene.planes.push_back({{0, 0.8, 0.6}, -3.8, {0.5f, 0.5f, 0.5f}, 1.0f, 1.0f});
+      scene.spheres.push_back({{0.1, 0.0, -0.45}, 0.3, {0.9f, 0.1f, 0.1f}, 1.0f, 1.0f});
+      test::GBuffer g = test::render(scene, proj, w, h);
+      for (size_t t = 0; t < g.position.pixel_count(); ++t) {
+        float* p = g.position.data.data() + 4 * t;
+        float* n = g.normal.data.data() + 4 * t;
+        switch (t % 37) {
+          case 2: p[3] = 0.0f; break;
+          case 4: p[0] = nan; break;
+          case 6: p[2] = -inf; break;
+          case 9: p[0] = p[1] = p[2] = 0.0f; break;
+          case 12: n[1] = nan; break;
+          case 15: n[0] = n[1] = n[2] = 0.0f; break;
+          case 18: n[2] = inf; break;
+          case 21: n[0] = -n[0], n[1] = -n[1], n[2] = -n[2]; break;
+          default: break;
+        }
+      }
+      for (const float max_distance : {0.05f, 100.0f, 1e7f}) {
+        for (const bool point_eye : {false, true}) {
+          TraceOptions opt;
+          opt.march = March::Hiz;
+          opt.max_distance = max_distance;
+          cpu::MarchSetup s = cpu::make_setup(g.position, g.normal, g.projection, opt, nullptr);
+          if (point_eye) {
+            s.eye_kind = EyeKind::Point;
+            s.eye[0] = 0.1f, s.eye[1] = -0.2f, s.eye[2] = 0.3f;
+          }
+          std::vector<int> xs(w);
+          for (int x = 0; x < w; ++x) xs[x] = x;
+          std::vector<cpu::RayFields> scalar(w), avx2(w);
+          std::vector<unsigned char> made_scalar(w), made_avx2(w);
+          int differ = 0, made = 0;
+          for (int y = 0; y < h; ++y) {
+            cpu::hiz_pixel_rays(s, y, xs.data(), w, cpu::WalkIsa::Scalar, scalar.data(), made_scalar.data());
+            cpu::hiz_pixel_rays(s, y, xs.data(), w, cpu::WalkIsa::Avx2, avx2.data(), made_avx2.data());
+            for (int x = 0; x < w; ++x) {
+              made += made_scalar[x];
+              differ += made_scalar[x] != made_avx2[x] ||
+                        (made_scalar[x] && std::memcmp(&scalar[x], &avx2[x], sizeof(cpu::RayFields)) != 0);
+            }
+          }
+          const std::string at = std::to_string(w) + "x" + std::to_string(h) + (ortho ? " ortho" : "") +
+                                 (point_eye ? " point eye" : "") + " length " + std::to_string(max_distance);
+          EXPECT_EQ(differ, 0) << at;
+          // Both answers occur, so that equal rays mean something.
+          EXPECT_GT(made, w * h / 2) << at;
+          EXPECT_LT(made, w * h) << at;
+        }
       }
     }
   }

@@ -116,6 +116,15 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 // (hiz_base.h), the same bytes.
 void hiz_reuse_surface_row(const TraceInputs& in, int y, WalkIsa isa, unsigned char* ok);
 
+// The pixel's own ray (march_hiz.cpp's make_ray()) of pixels (xs[k], y) for
+// k in [0, n): made[k] 1 with rays[k] set, 0 where the pixel has no ray.
+// Eight pixels at a time where `isa` is the AVX2 walk's (hiz_base.h), the
+// same rays bit for bit.
+struct MarchSetup;
+struct RayFields;
+void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa isa, RayFields* rays,
+                    unsigned char* made);
+
 // The whole frame on the CPU, with the walk hiz_walk_default() picks: the
 // `cpu` entry of the march's row (march.cpp).
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);

@@ -1,9 +1,10 @@
-// The pyramid's base level and its plane normals, and the G-buffer half of
-// the reuse of rays, one row at a time, in the form the AVX2 versions
-// (hiz_base_avx2.cpp, hiz_planes_avx2.cpp, hiz_reuse_avx2.cpp) take them:
-// plain pointers, since those files share no inline code with the rest of
-// the library. march_hiz.cpp's base_range() and reuse_surface(), and
-// hiz_planes.cpp's plane_normal(), are the scalar rules and explain them.
+// The pyramid's base level and its plane normals, the G-buffer half of the
+// reuse of rays and the pixels' own rays, one row at a time, in the form the
+// AVX2 versions (hiz_base_avx2.cpp, hiz_planes_avx2.cpp, hiz_reuse_avx2.cpp,
+// hiz_rays_avx2.cpp) take them: plain pointers, since those files share no
+// inline code with the rest of the library. march_hiz.cpp's base_range(),
+// reuse_surface() and make_ray(), and hiz_planes.cpp's plane_normal(), are
+// the scalar rules and explain them.
 #pragma once
 #include <cstddef>
 
@@ -69,5 +70,36 @@ struct ReuseRow {
 // x_end - x_begin a multiple of 8, x_begin >= 1, x_end <= width - 1, and on
 // an odd row both rows around it on the image. Only where the CPU has AVX2.
 void hiz_reuse_row_avx2(const ReuseRow& row, int x_begin, int x_end);
+
+// What march_hiz.cpp's Ray holds: everything about a ray that does not change
+// along its walk (march_hiz.cpp says what each field is).
+struct RayFields {
+  float f0[2], d[2];   // start pixel coordinates and end - start
+  float a0[3], da[3];  // A(0), A(1) - A(0): the view point times B
+  float b0, db;        // B(0), B(1) - B(0): 1 / clip w
+  float t_end;         // where the line leaves the image, or 1
+  float inv[2];        // 1 / d, 0 where d is 0
+  float nudge[2];      // hiz::kCellNudge along each axis the line moves on
+};
+
+// The pixels of row y whose own rays are made (make_ray()): the position and
+// shading normal rows (4 floats a texel, at the row's first texel), the
+// projection in float and in double (row-major), and MarchSetup's eye.
+struct RayRow {
+  const float* position = nullptr;
+  const float* normal = nullptr;
+  const float* proj = nullptr;
+  const double* projd = nullptr;
+  int eye_kind = 0;  // EyeKind: 0 origin, 1 point, 2 direction
+  float eye[3] = {0.0f, 0.0f, 0.0f};
+  float max_distance = 0.0f;
+  float cell_nudge = 0.0f;  // hiz::kCellNudge
+  int width = 0, height = 0;
+};
+
+// make_ray() of pixels xs[0 .. n) of the row, eight at a time: made[k] 1 with
+// rays[k] its ray bit for bit, 0 where the pixel has no ray. Only where the
+// CPU has AVX2.
+void hiz_pixel_rays_avx2(const RayRow& row, const int* xs, int n, RayFields* rays, unsigned char* made);
 
 }  // namespace glint::cpu

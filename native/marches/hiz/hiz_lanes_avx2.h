@@ -1,8 +1,9 @@
 // Eight float lanes in a ymm register, for the files built with -mavx2 alone
-// (hiz_base_avx2.cpp, hiz_planes_avx2.cpp, hiz_reuse_avx2.cpp). Everything here lives in an
-// anonymous namespace, so each of those files has its own copy and the
-// linker is never handed an AVX2 function that the rest of the library,
-// built for the baseline, could end up calling. Include it from nowhere else.
+// (hiz_base_avx2.cpp, hiz_planes_avx2.cpp, hiz_reuse_avx2.cpp,
+// hiz_rays_avx2.cpp). Everything here lives in an anonymous namespace, so
+// each of those files has its own copy and the linker is never handed an
+// AVX2 function that the rest of the library, built for the baseline, could
+// end up calling. Include it from nowhere else.
 #pragma once
 #include <immintrin.h>
 

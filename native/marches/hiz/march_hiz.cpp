@@ -138,16 +138,13 @@ void base_range(const Image& position, const HizPlanes& normal, const Image* bac
   out[1] = hi + t;
 }
 
-// Everything about one ray that does not change along the walk. Points on
-// the ray are interpolated in homogeneous form: at screen fraction t the
-// view point is A(t) / B(t), with A = view / w and B = 1 / w both linear in t
-// for any projective camera.
-struct Ray {
-  float f0[2], d[2];  // start pixel coordinates and end - start
-  float a0[3], da[3];  // A(0), A(1) - A(0)
-  float b0, db;       // B(0), B(1) - B(0)
-  float t_end;        // where the line leaves the image, or 1
-
+// Everything about one ray that does not change along the walk (its fields:
+// hiz_base.h's RayFields, which the AVX2 set-up fills). Points on the ray are
+// interpolated in homogeneous form: at screen fraction t the view point is
+// A(t) / B(t), with A = view / w and B = 1 / w both linear in t for any
+// projective camera. `inv` holds 1 / d (0 where d is 0): a product per side
+// of a box instead of a division, in the one order both backends use.
+struct Ray : RayFields {
   float depth(float t) const { return -(a0[2] + t * da[2]) / (b0 + t * db); }
   // depth(t) = num(t) / b(t) with b > 0: the walk compares num with
   // range * b and never divides.
@@ -159,11 +156,6 @@ struct Ray {
            np * (b0 + t * db);
   }
   // Where the line leaves the pixel box [x0, x1) x [y0, y1), as a fraction.
-  // inv holds 1 / d (0 where d is 0): a product per side instead of a
-  // division, in the one order both backends use.
-  float inv[2];
-  // Picking the cell the line is in: kCellNudge along each axis it moves on.
-  float nudge[2];
   float exit(const int box[4]) const {
     float te = t_end;
     if (d[0] != 0.0f)
@@ -368,20 +360,27 @@ inline float hit_visibility(float u, float v, float confidence) {
   return confidence * fade;
 }
 
+// Rays made at a time (hiz_pixel_rays()): enough for the AVX2 set-up's
+// lanes, few enough that they stay in the L1 cache until their walks start.
+constexpr int kRayChunk = 64;
+
 // A queue of pixels for hiz_walk() to trace, and the scalar parts of their
-// walks: each ray's set-up, and the texel test where a lane's walk stops at
-// level 0. `start` answers every pixel it takes: with its neighbours' result
-// (`reusable`), or a miss that the walk's hit overwrites.
+// walks: each ray, made a chunk at a time, and the texel test where a lane's
+// walk stops at level 0.
 struct PixelQueue {
   const TraceInputs& in;
   const MarchSetup& s;
   const HizPlanes& planes;
   const HizCamera& cam;
   Image& out;
-  int y = 0, x = 0, x_end = 0, x_step = 1;  // pixels (x, y), (x + x_step, y), ... before x_end
-  // The second pass: the row's reuse_surface() bytes. A pixel that passes is
-  // answered from its traced neighbours where their reports agree.
-  const unsigned char* reusable = nullptr;
+  WalkIsa isa = WalkIsa::Scalar;
+  int y = 0;
+  // The pixels of row y that walk (row_jobs()): xs[0 .. count), the rays of
+  // xs[chunk_begin .. chunk_end) in `rays` where `made`.
+  const int* xs = nullptr;
+  int count = 0, next = 0, chunk_begin = 0, chunk_end = 0;
+  RayFields rays[kRayChunk] = {};
+  unsigned char made[kRayChunk] = {};
   // The outline samples of row y (sample_start()): `per_pixel` rays for each
   // pixel edges[0..), into samples[4 * job].
   const int* edges = nullptr;
@@ -392,6 +391,23 @@ struct PixelQueue {
 };
 
 bool reuse_reports(const TraceInputs& in, const Image& out, int x, int y, float o[4]);
+
+// Answers every pixel (x0, y), (x0 + step, y), ... of a pass that does not
+// walk, and returns those that do, in order: a pixel that passed
+// reuse_surface() (`reusable`, on the second pass) takes its neighbours'
+// result where their reports agree; the rest are misses that a walk's hit
+// overwrites, and walk where they reflect.
+void row_jobs(const TraceInputs& in, Image& out, int y, int x0, int step, const unsigned char* reusable,
+              std::vector<int>& xs) {
+  xs.clear();
+  for (int x = x0; x < out.width; x += step) {
+    float* o = out.px(x, y);
+    if (reusable && reusable[x] && reuse_reports(in, out, x, y, o)) continue;
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    if (in.specular && !is_reflective(in.specular->px(x, y))) continue;
+    xs.push_back(x);
+  }
+}
 
 // The walk of ray r from pixel (x, y): it leaves the origin's own texel
 // first, since the ray starts on that texel's surface.
@@ -404,17 +420,19 @@ WalkRay walk_from(const Ray& r, int x, int y) {
 
 bool queue_start(void* ctx, int lane, WalkRay& w) {
   PixelQueue& q = *static_cast<PixelQueue*>(ctx);
-  while (q.x < q.x_end) {
-    const int x = q.x, y = q.y;
-    q.x += q.x_step;
-    float* o = q.out.px(x, y);
-    if (q.reusable && q.reusable[x] && reuse_reports(q.in, q.out, x, y, o)) continue;
-    o[0] = o[1] = o[2] = o[3] = 0.0f;
-    if (q.in.specular && !is_reflective(q.in.specular->px(x, y))) continue;
+  while (q.next < q.count) {
+    if (q.next == q.chunk_end) {
+      q.chunk_begin = q.next;
+      q.chunk_end = std::min(q.count, q.next + kRayChunk);
+      hiz_pixel_rays(q.s, q.y, q.xs + q.chunk_begin, q.chunk_end - q.chunk_begin, q.isa, q.rays, q.made);
+    }
+    const int k = q.next++ - q.chunk_begin;
+    if (!q.made[k]) continue;
+    const int x = q.xs[q.chunk_begin + k];
     Ray& r = q.ray[lane];
-    if (!make_ray(q.s, x, y, r)) continue;
-    q.dst[lane] = o;
-    w = walk_from(r, x, y);
+    static_cast<RayFields&>(r) = q.rays[k];
+    q.dst[lane] = q.out.px(x, q.y);
+    w = walk_from(r, x, q.y);
     return true;
   }
   return false;
@@ -752,6 +770,34 @@ bool sample_start(void* ctx, int lane, WalkRay& w) {
 
 }  // namespace
 
+void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa isa, RayFields* rays,
+                    unsigned char* made) {
+#if defined(GLINT_WALK_AVX2)
+  if (isa == WalkIsa::Avx2) {
+    RayRow r;
+    r.position = s.position->px(0, y);
+    r.normal = s.normal->px(0, y);
+    r.proj = s.proj;
+    r.projd = s.projd;
+    r.eye_kind = static_cast<int>(s.eye_kind);
+    for (int c = 0; c < 3; ++c) r.eye[c] = s.eye[c];
+    r.max_distance = s.opt.max_distance;
+    r.cell_nudge = kCellNudge;
+    r.width = s.position->width;
+    r.height = s.position->height;
+    hiz_pixel_rays_avx2(r, xs, n, rays, made);
+    return;
+  }
+#else
+  (void)isa;
+#endif
+  for (int k = 0; k < n; ++k) {
+    Ray ray;
+    made[k] = make_ray(s, xs[k], y, ray);
+    if (made[k]) rays[k] = ray;
+  }
+}
+
 // The AVX2 rows take the row's texels but its first and last, the row's ends
 // go one at a time.
 void hiz_reuse_surface_row(const TraceInputs& in, int y, WalkIsa isa, unsigned char* ok) {
@@ -814,17 +860,18 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
                                                      std::numeric_limits<int>::max()));
   // One queue per row (or pass of a row), walked a kernel's lanes at a time.
   auto walk_row = [&](int y, int x0, int step, bool reuse) {
-    PixelQueue q{in, setup, planes, cam, out};
-    q.y = y;
-    q.x = x0;
-    q.x_end = out.width;
-    q.x_step = step;
     std::vector<unsigned char> reusable;
     if (reuse) {
       reusable.resize(static_cast<size_t>(out.width));
       hiz_reuse_surface_row(in, y, isa, reusable.data());
-      q.reusable = reusable.data();
     }
+    std::vector<int> xs;
+    row_jobs(in, out, y, x0, step, reuse ? reusable.data() : nullptr, xs);
+    PixelQueue q{in, setup, planes, cam, out};
+    q.isa = isa;
+    q.y = y;
+    q.xs = xs.data();
+    q.count = static_cast<int>(xs.size());
     WalkHost host;
     host.ctx = &q;
     host.start = queue_start;
