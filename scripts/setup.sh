@@ -10,11 +10,11 @@ build=${GLINT_BUILD_DIR:-$root/build}
 
 packages=(
   build-essential cmake ninja-build pkg-config zlib1g-dev
-  python3-dev python3-numpy python3-pytest pybind11-dev
+  python3-dev python3-numpy python3-pytest python3-pytest-xdist pybind11-dev
   libglm-dev libopenexr-dev libembree-dev
   libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   googletest libgtest-dev libbenchmark-dev
-  blender xvfb xauth python3-matplotlib
+  blender xvfb xauth python3-matplotlib ccache
 )
 # Only where the libFuzzer harnesses are built (scripts/fuzz.sh).
 if [[ "${GLINT_WITH_FUZZERS:-0}" == 1 ]]; then packages+=(clang-14 libfuzzer-14-dev); fi
@@ -33,6 +33,15 @@ if [[ "${GLINT_NO_APT:-0}" != 1 ]]; then
   fi
 fi
 
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+# ccache keeps the compiled objects between builds and between checkouts: with
+# the checkout as its base dir, the paths it hashes are relative, so a fresh
+# clone elsewhere (CI's) finds the objects an earlier one made. The sanitized
+# and fuzz builds (scripts/test_sanitized.sh, scripts/fuzz.sh) use it too.
+launcher=()
+if command -v ccache >/dev/null; then
+  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >/dev/null
 cmake --build "$build" -j"$(nproc)"
 echo "glint setup: built in $build (python module: $build/python)"

@@ -14,7 +14,9 @@ cpp_only=0
 [[ "${1:-}" == --cpp-only ]] && cpp_only=1
 
 launcher=()
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# ccache with the checkout as base dir: objects shared across clones (setup.sh).
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache) &&
+  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
 # RelWithDebInfo: optimised enough that the marches finish within the tests'
 # time limits, with line numbers in every report. No benchmarks: never run here.
 # float-cast-overflow is named on its own: GCC's "undefined" leaves it out, and

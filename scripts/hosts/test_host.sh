@@ -13,7 +13,8 @@ paths=("$@")
 if ((${#paths[@]} == 0)); then read -r -a paths <<<"${GLINT_HOST_TESTS:-tests/addon tests/blender tests/python/test_exact.py tests/python/test_exact_scene.py}"; fi
 
 bash "$here/host.sh" make "$name" >/dev/null || exit 1
-bash "$here/host.sh" run "$name" bash -c '
+# GLINT_TEST_JOBS: pytest-xdist workers, as scripts/test.sh (1: one process).
+bash "$here/host.sh" run "$name" env GLINT_TEST_JOBS="${GLINT_TEST_JOBS:-$(nproc)}" bash -c '
   set -o pipefail
   build=/glint/build/host-$GLINT_HOST
   mkdir -p "$build"
@@ -23,5 +24,7 @@ bash "$here/host.sh" run "$name" bash -c '
     { cat "$build/configure.log"; echo "== $GLINT_HOST: configure failed"; exit 1; }
   cmake --build "$build" -j"$(nproc)" >"$build/build.log" 2>&1 ||
     { tail -40 "$build/build.log"; echo "== $GLINT_HOST: build failed"; exit 1; }
-  GLINT_BUILD_DIR=$build python3 -m pytest -q -p no:cacheprovider --durations=15 "$@"
+  xdist=()
+  if [[ $GLINT_TEST_JOBS != 1 ]] && python3 -c "import xdist" 2>/dev/null; then xdist=(-n "$GLINT_TEST_JOBS"); fi
+  GLINT_BUILD_DIR=$build python3 -m pytest -q -p no:cacheprovider --durations=15 "${xdist[@]}" "$@"
 ' test_host "${paths[@]}"
