@@ -233,7 +233,7 @@ def _show_report(message: str, level: str) -> None:
         return
     # A modal operator's report: Blender puts it in the status bar and the Info log
     # and, for an error, opens its report pop-up in the window.
-    with bpy.context.temp_override(window=win, screen=win.screen):
+    with bpy.context.temp_override(window=win):
         bpy.ops.glint.report("INVOKE_DEFAULT", level=level,
                              message=f"Glint: rendered without reflections: {message}")
 

@@ -220,7 +220,21 @@ for i in range(60):
 """
 
 
-def test_cancel_glint_stops_a_long_export_during_f12(xvfb, blender, samples, tmp_path):
+def blender_major() -> int:
+    text = subprocess.run([BLENDER, "--version"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                          text=True).stdout
+    return int(text.split()[1].split(".")[0]) if text.startswith("Blender ") else 0
+
+
+def test_cancel_glint_stops_a_long_export_during_f12(xvfb, blender, samples, tmp_path, request):
+    if blender_major() >= 5:
+        # Seen on 5.2.2 (sid's chroot, Xvfb): no redraw of the window between
+        # render_pre and the end of the export on the render thread, so the panel
+        # never shows the progress or the Cancel button to press. docs/addon.md,
+        # Limitations. Strict: the test fails when a Blender redraws again.
+        request.node.add_marker(pytest.mark.xfail(
+            reason="Blender 5.x does not redraw the window while Glint exports on the render thread",
+            strict=True))
     out = str(tmp_path / "cancel")
     res, log = run_ui(blender, samples["mirror_floor"], out, {
         "engine": "BLENDER_WORKBENCH", "python": HEAVY, "renders": [{"cancel_when_busy": True}]})

@@ -114,7 +114,7 @@ def _glint_status():
 def _override(win, area_type=None):
     area = next(a for a in win.screen.areas if area_type is None or a.type == area_type)
     region = next((rg for rg in area.regions if rg.type == "WINDOW"), area.regions[0])
-    return bpy.context.temp_override(window=win, screen=win.screen, area=area, region=region)
+    return bpy.context.temp_override(window=win, area=area, region=region)
 
 
 def _main_window():
@@ -161,7 +161,7 @@ def _scroll_to_glint():
     win = _main_window()
     area = _biggest_area()
     region = next(rg for rg in area.regions if rg.type == "WINDOW")
-    with bpy.context.temp_override(window=win, screen=win.screen, area=area, region=region):
+    with bpy.context.temp_override(window=win, area=area, region=region):
         for _ in range(20):  # Glint's panel is the last but one of the Render tab
             bpy.ops.view2d.scroll_down(page=True)
 
@@ -175,7 +175,7 @@ def _info_reports():
     wm = bpy.context.window_manager
     wm.clipboard = ""
     try:
-        with bpy.context.temp_override(window=win, screen=win.screen, area=area):
+        with bpy.context.temp_override(window=win, area=area):
             bpy.ops.info.select_all(action="SELECT")
             bpy.ops.info.report_copy()
         return wm.clipboard.splitlines()
