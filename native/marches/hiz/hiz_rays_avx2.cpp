@@ -1,5 +1,5 @@
 // The pixels' own rays (march_hiz.cpp's make_ray(): read_origin(),
-// make_ray_from() and the first try of clipped_length() in ray.cpp) for
+// make_ray_from() and clipped_length() in ray.cpp, its tries included) for
 // x86-64 CPUs with AVX2: eight pixels at once, one per lane. Like the other
 // *_avx2.cpp files, this one alone is built with -mavx2 and not -mfma and
 // includes no inline functions but hiz_lanes_avx2.h's. Each lane does the
@@ -137,16 +137,16 @@ void hiz_pixel_rays_avx2(const RayRow& r, const int* xs, int n, RayFields* rays,
       const VD* d = dd[half];
       const VD n0 = near_of(Pd, f[0], f[1], f[2]);
       front[half] = (n0 >= splatd(0.0)) & (clip_row(Pd, 3, f[0], f[1], f[2]) > splatd(0.0));
-      const VD full = splatd(static_cast<double>(r.max_distance));
-      const VD n1 = near_of(Pd, f[0] + d[0] * full, f[1] + d[1] * full, f[2] + d[2] * full);
-      len[half] = n1 < splatd(0.0) ? full * (n0 / (n0 - n1)) : full;
+      const VD most = splatd(static_cast<double>(r.max_distance));
+      const VD n1 = near_of(Pd, f[0] + d[0] * most, f[1] + d[1] * most, f[2] + d[2] * most);
+      len[half] = n1 < splatd(0.0) ? most * (n0 / (n0 - n1)) : most;
     }
     ok &= join_mask(front[0], front[1]);
     const VF full = join(len[0], len[1]);
     // The float end point on or in front of the plane: the first try is the
-    // full length, which ends it for all but the rays cut by the plane, where
-    // it rounds behind about half the time; those lanes try on, shrinking by
-    // the scalar rule's steps (the same for every lane), while any is left.
+    // full length, which ends it for all but some of the rays the plane cuts,
+    // whose end rounds behind it; those lanes try on, shrinking by the scalar
+    // rule's steps (the same for every lane), while any is left.
     VF length = full, end[3];
     auto end_at = [&](VF t) {
       for (int c = 0; c < 3; ++c) end[c] = from[c] + dir[c] * t;
@@ -162,7 +162,8 @@ void hiz_pixel_rays_avx2(const RayRow& r, const int* xs, int n, RayFields* rays,
       length = pick(now, t, length);
       settled |= now;
     }
-    // No try left in front: clipped_length()'s 0, which has no ray.
+    // No try left in front: clipped_length()'s 0, which has no ray. `end`
+    // holds the last try's points, not each lane's own: made again.
     length = pick(settled, length, splat(0.0f));
     for (int c = 0; c < 3; ++c) end[c] = from[c] + dir[c] * length;
     ok &= length > splat(0.0f);
