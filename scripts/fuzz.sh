@@ -11,10 +11,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${GLINT_FUZZ_BUILD_DIR:-$root/build-fuzz}
 seconds=${1:-20}
 
-launcher=()
-# ccache with the checkout as base dir: objects shared across clones (setup.sh).
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache) &&
-  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
+source "$root/scripts/ccache.sh"
 # Only the library and the harnesses: no Python, tests, tools or GL (the
 # harnesses drive the CPU backend and the EXR reader).
 CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -33,15 +33,8 @@ if [[ "${GLINT_NO_APT:-0}" != 1 ]]; then
   fi
 fi
 
-# ccache keeps the compiled objects between builds and between checkouts: with
-# the checkout as its base dir, the paths it hashes are relative, so a fresh
-# clone elsewhere (CI's) finds the objects an earlier one made. The sanitized
-# and fuzz builds (scripts/test_sanitized.sh, scripts/fuzz.sh) use it too.
-launcher=()
-if command -v ccache >/dev/null; then
-  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-fi
+# ccache keeps the compiled objects between builds and between checkouts.
+source "$root/scripts/ccache.sh"
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >/dev/null
 cmake --build "$build" -j"$(nproc)"
 echo "glint setup: built in $build (python module: $build/python)"

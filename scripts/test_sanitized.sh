@@ -13,10 +13,7 @@ build=${GLINT_ASAN_BUILD_DIR:-$root/build-asan}
 cpp_only=0
 [[ "${1:-}" == --cpp-only ]] && cpp_only=1
 
-launcher=()
-# ccache with the checkout as base dir: objects shared across clones (setup.sh).
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache) &&
-  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
+source "$root/scripts/ccache.sh"
 # RelWithDebInfo: optimised enough that the marches finish within the tests'
 # time limits, with line numbers in every report. No benchmarks: never run here.
 # float-cast-overflow is named on its own: GCC's "undefined" leaves it out, and
