@@ -36,23 +36,18 @@ int hiz_base_row_avx2(const BaseRow& a) {
   const VF sy0 = splat(sy0s), sy1 = splat(sy1s), inf = splat(__builtin_inff()), zero = splat(0.0f);
   const int full = a.width - a.width % 8;
   for (int x0 = 0; x0 < full; x0 += 8) {
-    // The lanes' inputs, gathered from their interleaved buffers.
-    VF p[4], n[3], b[4], sx0, sx1;
-    VI seen;
-    for (int l = 0; l < 8; ++l) {
-      const int x = x0 + l;
-      const float* pp = a.position + static_cast<size_t>(x) * 4;
-      const float* np = a.planes + static_cast<size_t>(x) * 3;
-      for (int c = 0; c < 4; ++c) p[c][l] = pp[c];
-      for (int c = 0; c < 3; ++c) n[c][l] = np[c];
-      if (a.back) {
-        const float* bp = a.back + static_cast<size_t>(x) * 4;
-        for (int c = 0; c < 4; ++c) b[c][l] = bp[c];
-      }
-      seen[l] = a.seen[x] ? -1 : 0;
-      sx0[l] = static_cast<float>(x) * sxs - 1.0f;
-      sx1[l] = static_cast<float>(x + 1) * sxs - 1.0f;
-    }
+    // The lanes' inputs, one vector per channel: the RGBA rows by two 4x4
+    // transposes, the plane normals' xyz by the same transposes on 4-float
+    // loads whose fourth float is not used (masked, so that the image's last
+    // texel reads nothing past its buffer).
+    VF p[4], n[4], b[4];
+    load_channels(a.position, x0, p);
+    load_xyz_channels(a.planes, x0, n);
+    if (a.back) load_channels(a.back, x0, b);
+    const VI seen = seen_mask(a.seen, x0);
+    const VI xs = VI{0, 1, 2, 3, 4, 5, 6, 7} + x0;
+    const VF sx0 = __builtin_convertvector(xs, VF) * sxs - 1.0f;
+    const VF sx1 = __builtin_convertvector(xs + 1, VF) * sxs - 1.0f;
     const VF d = -p[2];
     // texel_thickness(): the back layer's where it is seen and behind.
     VF t = splat(a.thickness);
@@ -91,11 +86,13 @@ int hiz_base_row_avx2(const BaseRow& a) {
     }
     lo = pick(seen, lo, inf);
     hi = pick(seen, hi + t, -inf);
+    // (lo, hi) pairs in texel order: the unpacks interleave within each
+    // 128-bit half, the permutes put the halves in order.
+    const __m256 u0 = _mm256_unpacklo_ps(reinterpret_cast<__m256>(lo), reinterpret_cast<__m256>(hi));
+    const __m256 u1 = _mm256_unpackhi_ps(reinterpret_cast<__m256>(lo), reinterpret_cast<__m256>(hi));
     float* o = a.out + static_cast<size_t>(x0) * 2;
-    for (int l = 0; l < 8; ++l) {
-      o[2 * l] = lo[l];
-      o[2 * l + 1] = hi[l];
-    }
+    _mm256_storeu_ps(o, _mm256_permute2f128_ps(u0, u1, 0x20));
+    _mm256_storeu_ps(o + 8, _mm256_permute2f128_ps(u0, u1, 0x31));
   }
   return full;
 }

@@ -47,5 +47,31 @@ __attribute__((always_inline)) inline void load_channels(const float* row, int x
   c[3] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0xEE));
 }
 
+// The same for texels x .. x + 7 of an xyz row (3 floats a texel): each
+// texel's 4-float load takes the next texel's first float as its fourth,
+// which c[3] holds and nobody reads; the last texel's load is masked to
+// three floats, so that the image's last texel reads nothing past it.
+__attribute__((always_inline)) inline void load_xyz_channels(const float* row, int x, VF c[4]) {
+  const float* p = row + static_cast<size_t>(x) * 3;
+  const __m128 last = _mm_maskload_ps(p + 21, _mm_setr_epi32(-1, -1, -1, 0));
+  __m256 r0 = _mm256_loadu2_m128(p + 12, p), r1 = _mm256_loadu2_m128(p + 15, p + 3);
+  __m256 r2 = _mm256_loadu2_m128(p + 18, p + 6);
+  __m256 r3 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 9)), last, 1);
+  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+  c[0] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0x44));
+  c[1] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0xEE));
+  c[2] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0x44));
+  c[3] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0xEE));
+}
+
+// The seen bytes of texels x .. x + 7 as lane masks; none where the row is
+// off the image (seen null).
+__attribute__((always_inline)) inline VI seen_mask(const unsigned char* seen, int x) {
+  if (!seen) return VI{};
+  const __m256i v = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(seen + x)));
+  return reinterpret_cast<VI>(v) != VI{};
+}
+
 }  // namespace
 }  // namespace glint::cpu

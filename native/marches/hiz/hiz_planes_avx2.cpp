@@ -17,13 +17,6 @@
 namespace glint::cpu {
 namespace {
 
-// The seen bytes of texels x .. x + 7 as lane masks; none where the row is off the image.
-__attribute__((always_inline)) inline VI seen_mask(const unsigned char* seen, int x) {
-  if (!seen) return VI{};
-  const __m256i v = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(seen + x)));
-  return reinterpret_cast<VI>(v) != VI{};
-}
-
 // Texels x .. x + 7 of one row as plane_normal() sees them: their positions
 // and whether each is seen (zeros and unseen where the row is off the image:
 // the masks never pick those values).
