@@ -9,9 +9,11 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <vector>
 
 #include "analytic_scene.h"
 #include "cpu/march.h"
+#include "cpu/outline.h"
 #include "glint/marches.h"
 #include "glint/stages.h"
 #include "hiz/hiz.h"
@@ -257,3 +259,35 @@ TEST(HizWalk, Avx2PixelRaysMatchTheScalarOnesBitForBit) {
 }
 
 }  // namespace
+
+// The outline test's report bytes (cpu/outline.h), sixteen pixels at a time
+// on x86-64, are report_of() pixel for pixel: widths around the sixteens,
+// and the values where a compare could go the other way (-0, NaN in either
+// channel, infinities, the smallest denormal, negative visibility).
+TEST(HizWalk, ReportRowMatchesReportOfPixelByPixel) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const float den = std::numeric_limits<float>::denorm_min();
+  const float values[] = {0.0f, -0.0f, 1.0f, 0.5f, -1.0f, nan, inf, -inf, den, -den};
+  const int kinds = static_cast<int>(sizeof values / sizeof values[0]);
+  for (int width : {1, 15, 16, 17, 31, 32, 33, 100}) {
+    std::vector<float> row(4 * static_cast<size_t>(width));
+    for (int x = 0; x < width; ++x) {
+      row[4 * x + 0] = 0.25f;
+      row[4 * x + 1] = 0.75f;
+      row[4 * x + 2] = values[x % kinds];
+      row[4 * x + 3] = values[(x / kinds + 3 * x) % kinds];
+    }
+    std::vector<unsigned char> bytes(static_cast<size_t>(width), 7);
+    cpu::report_row(row.data(), width, bytes.data());
+    int differ = 0, hits = 0, misses = 0;
+    for (int x = 0; x < width; ++x) {
+      const cpu::Report r = cpu::report_of(row.data() + 4 * x);
+      differ += bytes[x] != static_cast<unsigned char>(r);
+      hits += r == cpu::Report::Hit;
+      misses += r == cpu::Report::Miss;
+    }
+    EXPECT_EQ(differ, 0) << "width " << width;
+    // The values reach every kind of report, so that equal bytes mean something.
+    if (width >= 100) EXPECT_TRUE(hits > 0 && misses > 0 && hits + misses < width) << width;
+  }
+}

@@ -1,7 +1,14 @@
 // Antialiased outlines: finding the pixels and resolving their rays (outline.h).
 #include "outline.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "glint/material.h"
 #include "parallel.h"
@@ -46,7 +53,47 @@ bool on_outline(const TraceInputs& in, const Image& out, const unsigned char* re
   return false;
 }
 
+#if defined(__SSE2__)
+// report_of() of pixels [0, n) of a row of reports, n the width rounded down
+// to 16, sixteen at a time in SSE2 (every x86-64 CPU has it); returns n.
+// Compares are exact, so the bytes are report_of()'s. One pixel at a time,
+// the row's bytes took a fiftieth of a balanced trace.
+int report_row_sse2(const float* o, int width, unsigned char* row) {
+  static_assert(static_cast<int>(Report::Miss) == 0 && static_cast<int>(Report::Hit) == 1 &&
+                    static_cast<int>(Report::Other) == 2,
+                "the bytes made below");
+  const int n = width - width % 16;
+  const __m128 zero = _mm_setzero_ps();
+  const __m128i one = _mm_set1_epi32(1), two = _mm_set1_epi32(2);
+  for (int x0 = 0; x0 < n; x0 += 16) {
+    __m128i r[4];
+    for (int q = 0; q < 4; ++q) {
+      const float* p = o + 4 * static_cast<size_t>(x0 + 4 * q);
+      // (z, w) of four pixels: z0 w0 z1 w1 and z2 w2 z3 w3, then split.
+      const __m128 a = _mm_shuffle_ps(_mm_loadu_ps(p), _mm_loadu_ps(p + 4), _MM_SHUFFLE(3, 2, 3, 2));
+      const __m128 b = _mm_shuffle_ps(_mm_loadu_ps(p + 8), _mm_loadu_ps(p + 12), _MM_SHUFFLE(3, 2, 3, 2));
+      const __m128 z = _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)), w = _mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
+      const __m128i hit = _mm_castps_si128(_mm_cmpgt_ps(w, zero));
+      const __m128i miss = _mm_castps_si128(_mm_and_ps(_mm_cmpeq_ps(z, zero), _mm_cmpeq_ps(w, zero)));
+      // Hit 1, else Miss 0, else Other 2 (a hit is never a miss: w > 0).
+      r[q] = _mm_or_si128(_mm_and_si128(hit, one), _mm_andnot_si128(_mm_or_si128(hit, miss), two));
+    }
+    const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(r[0], r[1]), _mm_packs_epi32(r[2], r[3]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(row + x0), bytes);
+  }
+  return n;
+}
+#endif
+
 }  // namespace
+
+void report_row(const float* o, int width, unsigned char* bytes) {
+  int x = 0;
+#if defined(__SSE2__)
+  x = report_row_sse2(o, width, bytes);
+#endif
+  for (; x < width; ++x) bytes[x] = static_cast<unsigned char>(report_of(o + 4 * static_cast<size_t>(x)));
+}
 
 bool same_surface(const TraceInputs& in, const float* p, const float* n, int qx, int qy) {
   if (in.specular && !is_reflective(in.specular->px(qx, qy))) return false;
@@ -60,8 +107,7 @@ std::vector<std::vector<int>> outline_pixels(const TraceInputs& in, const Image&
   const int width = out.width, height = out.height;
   std::vector<unsigned char> reports(out.pixel_count());
   parallel_rows(0, height, threads, [&](int y) {
-    unsigned char* row = reports.data() + static_cast<size_t>(y) * width;
-    for (int x = 0; x < width; ++x) row[x] = static_cast<unsigned char>(report_of(out.px(x, y)));
+    report_row(out.px(0, y), width, reports.data() + static_cast<size_t>(y) * width);
   });
   // A hit beside a miss is on_outline()'s first test: with Miss 0 and Hit 1,
   // the neighbour to look for is report ^ 1 (Other's 3 matches nothing). Done
@@ -75,16 +121,26 @@ std::vector<std::vector<int>> outline_pixels(const TraceInputs& in, const Image&
     const unsigned char* r = reports.data() + static_cast<size_t>(y) * width;
     const unsigned char* up = y + 1 < height ? r + width : none.data();
     const unsigned char* down = y > 0 ? r - width : none.data();
-    std::vector<unsigned char> near(static_cast<size_t>(width));
-    const auto test = [&](int x, unsigned char left, unsigned char right) {
-      const unsigned char m = r[x] ^ 1;
-      return static_cast<unsigned char>((left == m) | (right == m) | (up[x] == m) | (down[x] == m));
-    };
-    near[0] = test(0, 2, width > 1 ? r[1] : 2);
-    for (int x = 1; x + 1 < width; ++x) near[x] = test(x, r[x - 1], r[x + 1]);
-    if (width > 1) near[width - 1] = test(width - 1, r[width - 2], 2);
-    for (int x = 0; x < width; ++x)
-      if (near[x] && on_outline(in, out, reports.data(), x, y)) edges[y].push_back(x);
+    // The row padded with an Other on either side, so that one loop with no
+    // edge cases (which the compiler vectorises) covers it.
+    std::vector<unsigned char> padded(static_cast<size_t>(width) + 2, static_cast<unsigned char>(Report::Other));
+    std::copy(r, r + width, padded.begin() + 1);
+    std::vector<unsigned char> near(static_cast<size_t>(width) + 8, 0);  // whole 8-byte words to scan
+    const unsigned char* c = padded.data() + 1;
+    unsigned char* nr = near.data();
+    const int n = width;
+    for (int x = 0; x < n; ++x) {
+      const unsigned char m = c[x] ^ 1;
+      nr[x] = static_cast<unsigned char>((c[x - 1] == m) | (c[x + 1] == m) | (up[x] == m) | (down[x] == m));
+    }
+    // Eight pixels a word: most words are all zero.
+    for (int x0 = 0; x0 < n; x0 += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, nr + x0, sizeof word);
+      if (!word) continue;
+      for (int x = x0; x < std::min(n, x0 + 8); ++x)
+        if (nr[x] && on_outline(in, out, reports.data(), x, y)) edges[y].push_back(x);
+    }
   });
   return edges;
 }

@@ -28,6 +28,10 @@ inline Report report_of(const float* o) {
   return o[2] == 0.0f && o[3] == 0.0f ? Report::Miss : Report::Other;
 }
 
+// report_of() of `width` pixels of a row of reports (4 floats a pixel), as
+// bytes.
+void report_row(const float* o, int width, unsigned char* bytes);
+
 // Whether normals n and m (any length) lie within hiz::kReuseCos of each other.
 inline bool normals_agree(const float* n, const float* m) {
   const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
