@@ -252,13 +252,48 @@ TEST(HizWalk, Avx2PixelRaysMatchTheScalarOnesBitForBit) {
           // Both answers occur, so that equal rays mean something.
           EXPECT_GT(made, w * h / 2) << at;
           EXPECT_LT(made, w * h) << at;
+
+          // The outline samples' rays (hiz_sample_rays()): every pixel from
+          // the four antialiasing offsets and two near its corners, on the
+          // plane normals of the pyramid, some of them unusable.
+          const cpu::HizCamera cam = cpu::hiz_camera(g.projection);
+          cpu::HizPlanes planes;
+          cpu::build_hiz_pyramid(g.position, g.normal, nullptr, cam, 0.3f, 1, planes, cpu::WalkIsa::Scalar);
+          for (size_t t = 0; t < g.position.pixel_count(); t += 29) {
+            float* n = planes.xyz.data() + 3 * t;
+            if (t % 3 == 0) n[1] = nan;
+            if (t % 3 == 1) n[0] = n[1] = n[2] = 0.0f;
+          }
+          const float corners[6][2] = {{-0.125f, -0.375f}, {0.375f, -0.125f}, {0.125f, 0.375f},
+                                       {-0.375f, 0.125f}, {0.3f, -0.49f},    {-0.5f, 0.1f}};
+          std::vector<int> sxs;
+          std::vector<float> offsets;
+          for (int x = 0; x < w; ++x)
+            for (const auto& c : corners) sxs.push_back(x), offsets.push_back(c[0]), offsets.push_back(c[1]);
+          const int n = static_cast<int>(sxs.size());
+          std::vector<cpu::RayFields> sample_scalar(n), sample_avx2(n);
+          std::vector<unsigned char> sample_made_scalar(n), sample_made_avx2(n);
+          int sample_differ = 0, sample_made = 0;
+          for (int y = 0; y < h; ++y) {
+            cpu::hiz_sample_rays(s, planes, cam, y, sxs.data(), offsets.data(), n, cpu::WalkIsa::Scalar,
+                                 sample_scalar.data(), sample_made_scalar.data());
+            cpu::hiz_sample_rays(s, planes, cam, y, sxs.data(), offsets.data(), n, cpu::WalkIsa::Avx2,
+                                 sample_avx2.data(), sample_made_avx2.data());
+            for (int k = 0; k < n; ++k) {
+              sample_made += sample_made_scalar[k];
+              sample_differ += sample_made_scalar[k] != sample_made_avx2[k] ||
+                               (sample_made_scalar[k] &&
+                                std::memcmp(&sample_scalar[k], &sample_avx2[k], sizeof(cpu::RayFields)) != 0);
+            }
+          }
+          EXPECT_EQ(sample_differ, 0) << at << " (samples)";
+          EXPECT_GT(sample_made, n * h / 2) << at << " (samples)";
+          EXPECT_LT(sample_made, n * h) << at << " (samples)";
         }
       }
     }
   }
 }
-
-}  // namespace
 
 // The outline test's report bytes (cpu/outline.h), sixteen pixels at a time
 // on x86-64, are report_of() pixel for pixel: widths around the sixteens,
@@ -291,3 +326,5 @@ TEST(HizWalk, ReportRowMatchesReportOfPixelByPixel) {
     if (width >= 100) EXPECT_TRUE(hits > 0 && misses > 0 && hits + misses < width) << width;
   }
 }
+
+}  // namespace

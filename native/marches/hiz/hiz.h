@@ -125,6 +125,14 @@ struct RayFields;
 void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa isa, RayFields* rays,
                     unsigned char* made);
 
+// The antialiased outlines' rays (march_hiz.cpp's subpixel_ray()): ray k from
+// pixel (xs[k], y), offsets[2k] and offsets[2k + 1] pixels off its centre,
+// from where the view ray through that point meets the texel's tangent
+// plane; made and rays as hiz_pixel_rays(), the same rays bit for bit on
+// AVX2.
+void hiz_sample_rays(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, int y, const int* xs,
+                     const float* offsets, int n, WalkIsa isa, RayFields* rays, unsigned char* made);
+
 // The whole frame on the CPU, with the walk hiz_walk_default() picks: the
 // `cpu` entry of the march's row (march.cpp).
 Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads);

@@ -94,12 +94,20 @@ struct RayRow {
   float eye[3] = {0.0f, 0.0f, 0.0f};
   float max_distance = 0.0f;
   float cell_nudge = 0.0f;  // hiz::kCellNudge
-  int width = 0, height = 0;
+  int width = 0, height = 0, y = 0;
+  // For the outline samples (subpixel_ray()): two floats a ray, its offset
+  // from the pixel's centre in pixels; null for the pixels' own rays. Then
+  // also the plane normals' row (3 floats a texel), HizCamera::inv and
+  // hiz::kFootprintSpread.
+  const float* offset = nullptr;
+  const float* planes = nullptr;
+  const float* inv = nullptr;
+  float footprint_spread = 0.0f;
 };
 
-// make_ray() of pixels xs[0 .. n) of the row, eight at a time: made[k] 1 with
-// rays[k] its ray bit for bit, 0 where the pixel has no ray. Only where the
-// CPU has AVX2.
+// make_ray() of pixels xs[0 .. n) of the row, or subpixel_ray() where
+// `offset` is set, eight at a time: made[k] 1 with rays[k] its ray bit for
+// bit, 0 where the pixel has no ray. Only where the CPU has AVX2.
 void hiz_pixel_rays_avx2(const RayRow& row, const int* xs, int n, RayFields* rays, unsigned char* made);
 
 }  // namespace glint::cpu

@@ -91,21 +91,60 @@ void hiz_pixel_rays_avx2(const RayRow& r, const int* xs, int n, RayFields* rays,
     for (int c = 0; c < 3; ++c) nr[c] = gather(r.normal, texel + c);
     const VF nn = dot3(nr, nr);
     VI ok = texel_seen(p) & finite(nr[0]) & finite(nr[1]) & finite(nr[2]) & (nn != splat(0.0f));
-    const VF from[3] = {p[0], p[1], p[2]};
+    VF from[3] = {p[0], p[1], p[2]};
 
     // incident_direction(): normalize(v) is v * (1 / sqrt(v . v)).
     VF unit[3];
-    if (r.eye_kind == 2) {
-      for (int c = 0; c < 3; ++c) unit[c] = splat(r.eye[c]);
-    } else {
-      VF v[3];
-      for (int c = 0; c < 3; ++c) v[c] = r.eye_kind == 1 ? from[c] - splat(r.eye[c]) : from[c];
-      const VF vv = dot3(v, v);
-      ok &= vv != splat(0.0f);
-      const VF s = splat(1.0f) / vsqrt(vv);
-      for (int c = 0; c < 3; ++c) unit[c] = v[c] * s;
+    auto incident = [&]() {
+      if (r.eye_kind == 2) {
+        for (int c = 0; c < 3; ++c) unit[c] = splat(r.eye[c]);
+      } else {
+        VF v[3];
+        for (int c = 0; c < 3; ++c) v[c] = r.eye_kind == 1 ? from[c] - splat(r.eye[c]) : from[c];
+        const VF vv = dot3(v, v);
+        ok &= vv != splat(0.0f);
+        const VF s = splat(1.0f) / vsqrt(vv);
+        for (int c = 0; c < 3; ++c) unit[c] = v[c] * s;
+      }
+      ok &= finite(unit[0]) & finite(unit[1]) & finite(unit[2]);
+    };
+    incident();
+    if (r.offset) {
+      // subpixel_ray(): texel_plane()'s row L of the texel's plane, from the
+      // plane normal (not the shading one); the point of that plane under
+      // the sample, unprojected; kept within the footprint's depth spread.
+      VF pn[3];
+      VI planes_at{};
+      for (int l = 0; l < 8; ++l) planes_at[l] = 3 * xs[k0 + (l < m ? l : 0)];
+      for (int c = 0; c < 3; ++c) pn[c] = gather(r.planes, planes_at + c);
+      const VF zero = splat(0.0f);
+      ok &= finite(pn[0]) & finite(pn[1]) & finite(pn[2]) & ((pn[0] != zero) | (pn[1] != zero) | (pn[2] != zero));
+      const float* H = r.inv;
+      const VF kd = dot3(pn, from);
+      VF L[4];
+      for (int c = 0; c < 4; ++c)
+        L[c] = pn[0] * splat(H[c]) + pn[1] * splat(H[4 + c]) + pn[2] * splat(H[8 + c]) - kd * splat(H[12 + c]);
+      ok &= L[2] != zero;
+      VF ox, oy, px;
+      for (int l = 0; l < 8; ++l) {
+        const int k = k0 + (l < m ? l : 0);
+        ox[l] = r.offset[2 * k];
+        oy[l] = r.offset[2 * k + 1];
+        px[l] = static_cast<float>(xs[k]);
+      }
+      const VF sx = (px + (splat(0.5f) + ox)) * splat(2.0f / w) - splat(1.0f);
+      const VF sy = (splat(static_cast<float>(r.y)) + (splat(0.5f) + oy)) * splat(2.0f / h) - splat(1.0f);
+      const VF sz = -(L[0] * sx + L[1] * sy + L[3]) / L[2];
+      VF v[4];
+      for (int c = 0; c < 4; ++c)
+        v[c] = splat(H[4 * c]) * sx + splat(H[4 * c + 1]) * sy + splat(H[4 * c + 2]) * sz + splat(H[4 * c + 3]);
+      const VF at[3] = {v[0] / v[3], v[1] / v[3], v[2] / v[3]};
+      const VF d = -from[2];
+      ok &= finite(at[0]) & finite(at[1]) & finite(at[2]) &
+            (vabs(-at[2] - d) <= splat(r.footprint_spread) * vabs(d));
+      for (int c = 0; c < 3; ++c) from[c] = at[c];
+      incident();
     }
-    ok &= finite(unit[0]) & finite(unit[1]) & finite(unit[2]);
     VF normal[3];
     {
       const VF s = splat(1.0f) / vsqrt(nn);

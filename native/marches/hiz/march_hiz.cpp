@@ -752,14 +752,30 @@ bool subpixel_ray(const MarchSetup& s, const HizPlanes& planes, const HizCamera&
 bool sample_start(void* ctx, int lane, WalkRay& w) {
   PixelQueue& q = *static_cast<PixelQueue*>(ctx);
   while (q.job < q.jobs) {
+    if (q.job == q.chunk_end) {
+      // The next kRayChunk samples' rays, made together (hiz_sample_rays()).
+      q.chunk_begin = q.job;
+      q.chunk_end = std::min(q.jobs, q.job + kRayChunk);
+      int xs[kRayChunk];
+      float offsets[2 * kRayChunk];
+      for (int j = q.chunk_begin; j < q.chunk_end; ++j) {
+        const int k = j % q.per_pixel, c = j - q.chunk_begin;
+        xs[c] = q.edges[j / q.per_pixel];
+        offsets[2 * c] = kAaOffset[k][0];
+        offsets[2 * c + 1] = kAaOffset[k][1];
+      }
+      hiz_sample_rays(q.s, q.planes, q.cam, q.y, xs, offsets, q.chunk_end - q.chunk_begin, q.isa, q.rays,
+                      q.made);
+    }
     const int j = q.job++;
-    const int x = q.edges[j / q.per_pixel], k = j % q.per_pixel;
+    const int x = q.edges[j / q.per_pixel], c = j - q.chunk_begin;
     float* o = q.samples + static_cast<size_t>(j) * 4;
-    const float* c = q.out.px(x, q.y);
-    o[0] = c[0], o[1] = c[1], o[2] = c[2], o[3] = c[3];
-    Ray& r = q.ray[lane];
-    if (!subpixel_ray(q.s, q.planes, q.cam, x, q.y, kAaOffset[k][0], kAaOffset[k][1], r)) continue;
+    const float* centre = q.out.px(x, q.y);
+    o[0] = centre[0], o[1] = centre[1], o[2] = centre[2], o[3] = centre[3];
+    if (!q.made[c]) continue;
     o[0] = o[1] = o[2] = o[3] = 0.0f;
+    Ray& r = q.ray[lane];
+    static_cast<RayFields&>(r) = q.rays[c];
     q.dst[lane] = o;
     w = walk_from(r, x, q.y);
     return true;
@@ -770,22 +786,31 @@ bool sample_start(void* ctx, int lane, WalkRay& w) {
 
 }  // namespace
 
+#if defined(GLINT_WALK_AVX2)
+namespace {
+RayRow ray_row(const MarchSetup& s, int y) {
+  RayRow r;
+  r.position = s.position->px(0, y);
+  r.normal = s.normal->px(0, y);
+  r.proj = s.proj;
+  r.projd = s.projd;
+  r.eye_kind = static_cast<int>(s.eye_kind);
+  for (int c = 0; c < 3; ++c) r.eye[c] = s.eye[c];
+  r.max_distance = s.opt.max_distance;
+  r.cell_nudge = kCellNudge;
+  r.width = s.position->width;
+  r.height = s.position->height;
+  r.y = y;
+  return r;
+}
+}  // namespace
+#endif
+
 void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa isa, RayFields* rays,
                     unsigned char* made) {
 #if defined(GLINT_WALK_AVX2)
   if (isa == WalkIsa::Avx2) {
-    RayRow r;
-    r.position = s.position->px(0, y);
-    r.normal = s.normal->px(0, y);
-    r.proj = s.proj;
-    r.projd = s.projd;
-    r.eye_kind = static_cast<int>(s.eye_kind);
-    for (int c = 0; c < 3; ++c) r.eye[c] = s.eye[c];
-    r.max_distance = s.opt.max_distance;
-    r.cell_nudge = kCellNudge;
-    r.width = s.position->width;
-    r.height = s.position->height;
-    hiz_pixel_rays_avx2(r, xs, n, rays, made);
+    hiz_pixel_rays_avx2(ray_row(s, y), xs, n, rays, made);
     return;
   }
 #else
@@ -794,6 +819,28 @@ void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa is
   for (int k = 0; k < n; ++k) {
     Ray ray;
     made[k] = make_ray(s, xs[k], y, ray);
+    if (made[k]) rays[k] = ray;
+  }
+}
+
+void hiz_sample_rays(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, int y, const int* xs,
+                     const float* offsets, int n, WalkIsa isa, RayFields* rays, unsigned char* made) {
+#if defined(GLINT_WALK_AVX2)
+  if (isa == WalkIsa::Avx2) {
+    RayRow r = ray_row(s, y);
+    r.offset = offsets;
+    r.planes = planes.px(0, y);
+    r.inv = cam.inv;
+    r.footprint_spread = kFootprintSpread;
+    hiz_pixel_rays_avx2(r, xs, n, rays, made);
+    return;
+  }
+#else
+  (void)isa;
+#endif
+  for (int k = 0; k < n; ++k) {
+    Ray ray;
+    made[k] = subpixel_ray(s, planes, cam, xs[k], y, offsets[2 * k], offsets[2 * k + 1], ray);
     if (made[k]) rays[k] = ray;
   }
 }
@@ -898,6 +945,7 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
     if (row.empty()) return;
     std::vector<float> samples(row.size() * static_cast<size_t>(k) * 4);
     PixelQueue q{in, setup, planes, cam, out};
+    q.isa = isa;
     q.y = y;
     q.edges = row.data();
     q.jobs = static_cast<int>(row.size()) * k;
