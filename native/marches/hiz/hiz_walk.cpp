@@ -1,6 +1,6 @@
 // The hiz walk one ray at a time, the form every machine runs, and the choice
 // of walk at run time (hiz_walk.h). hiz_walk_avx2.cpp runs the same steps on
-// eight rays at once; hiz_walk.glsl is this function's port to GL.
+// sixteen rays at once; hiz_walk.glsl is this function's port to GL.
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -4,8 +4,9 @@
 // steps. One ray is a chain of ~25 dependent steps of a few dozen
 // instructions each, which leaves a core mostly waiting on the chain; rays
 // are independent, so on AVX2 one chain of vector steps walks eight of them,
-// each in its own lane (hiz_walk_avx2.cpp), with the scalar walk's answers
-// bit for bit. hiz_walk.glsl is the same walk on GL.
+// each in its own lane, and two such chains run side by side
+// (hiz_walk_avx2.cpp), with the scalar walk's answers bit for bit.
+// hiz_walk.glsl is the same walk on GL.
 #pragma once
 
 namespace glint::cpu {
@@ -52,11 +53,12 @@ struct WalkHost {
   bool (*texel)(void* ctx, int lane, int i, int j, float ta, float tb) = nullptr;
 };
 
-// The most rays a walk keeps at once: the caller keeps this many rays' state.
-constexpr int kWalkLanes = 8;
+// The most rays a walk keeps at once (the AVX2 walk's two groups of eight
+// lanes): the caller keeps this many rays' state.
+constexpr int kWalkLanes = 16;
 
 // The walks: one ray at a time (hiz_walk.cpp), which every machine runs, and
-// eight at once in AVX2 registers (hiz_walk_avx2.cpp), built on x86-64 and
+// sixteen at once in AVX2 registers (hiz_walk_avx2.cpp), built on x86-64 and
 // run where the CPU has AVX2. Their answers are the same bit for bit.
 enum class WalkIsa { Scalar, Avx2 };
 bool hiz_walk_available(WalkIsa isa);

@@ -10,7 +10,7 @@
 // space), and the cell is entered only if that span meets the cell's
 // [nearest surface, farthest surface + thickness]. Empty space is skipped a
 // whole cell at a time and no interval of depth is ever jumped over. The walk
-// itself is hiz_walk.cpp's (eight rays at once on AVX2); this file makes each
+// itself is hiz_walk.cpp's (sixteen rays at once on AVX2); this file makes each
 // ray, builds the pyramid and tests the texels the walk stops at.
 //
 // At a texel the surface is the texel's tangent plane (its position and
