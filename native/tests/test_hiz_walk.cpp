@@ -1,9 +1,10 @@
 // The hiz march's walks (native/marches/hiz/hiz_walk.h) give the same answers bit
-// for bit: the AVX2 walk, eight rays at once, against the scalar one, on the
+// for bit: the AVX2 walk, sixteen rays at once, against the scalar one, on the
 // analytic scene with every option that changes which path a ray takes; the
 // pyramid built eight texels at a time against the scalar one; the reuse
-// test's G-buffer half and the pixels' own rays, eight pixels at a time
-// against the scalar ones.
+// test's G-buffer half, the pixels' own rays and the outline samples' rays,
+// eight at a time against the scalar ones; the outline search's report bytes
+// sixteen at a time against report_of().
 #include <gtest/gtest.h>
 
 #include <cmath>
