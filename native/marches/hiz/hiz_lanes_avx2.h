@@ -33,18 +33,22 @@ __attribute__((always_inline)) inline VI texel_seen(const VF p[4]) {
 
 __attribute__((always_inline)) inline VF vabs(VF v) { return reinterpret_cast<VF>(reinterpret_cast<VI>(v) & 0x7fffffff); }
 
-// Texels x .. x + 7 of an RGBA row as four vectors, one per channel: two
-// 4x4 transposes, one per 128-bit half (texels x .. x + 3 and x + 4 .. x + 7).
-__attribute__((always_inline)) inline void load_channels(const float* row, int x, VF c[4]) {
-  const float* p = row + static_cast<size_t>(x) * 4;
-  __m256 r0 = _mm256_loadu2_m128(p + 16, p), r1 = _mm256_loadu2_m128(p + 20, p + 4);
-  __m256 r2 = _mm256_loadu2_m128(p + 24, p + 8), r3 = _mm256_loadu2_m128(p + 28, p + 12);
+// Two 4x4 transposes, one per 128-bit half: rk holds texels k and k + 4,
+// four floats each; c[j] gets channel j of texels 0 .. 7 in lane order.
+__attribute__((always_inline)) inline void transpose_halves(__m256 r0, __m256 r1, __m256 r2, __m256 r3, VF c[4]) {
   const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
   const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
   c[0] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0x44));
   c[1] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0xEE));
   c[2] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0x44));
   c[3] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0xEE));
+}
+
+// Texels x .. x + 7 of an RGBA row as four vectors, one per channel.
+__attribute__((always_inline)) inline void load_channels(const float* row, int x, VF c[4]) {
+  const float* p = row + static_cast<size_t>(x) * 4;
+  transpose_halves(_mm256_loadu2_m128(p + 16, p), _mm256_loadu2_m128(p + 20, p + 4),
+                   _mm256_loadu2_m128(p + 24, p + 8), _mm256_loadu2_m128(p + 28, p + 12), c);
 }
 
 // The same for texels x .. x + 7 of an xyz row (3 floats a texel): each
@@ -54,15 +58,9 @@ __attribute__((always_inline)) inline void load_channels(const float* row, int x
 __attribute__((always_inline)) inline void load_xyz_channels(const float* row, int x, VF c[4]) {
   const float* p = row + static_cast<size_t>(x) * 3;
   const __m128 last = _mm_maskload_ps(p + 21, _mm_setr_epi32(-1, -1, -1, 0));
-  __m256 r0 = _mm256_loadu2_m128(p + 12, p), r1 = _mm256_loadu2_m128(p + 15, p + 3);
-  __m256 r2 = _mm256_loadu2_m128(p + 18, p + 6);
-  __m256 r3 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 9)), last, 1);
-  const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
-  const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-  c[0] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0x44));
-  c[1] = reinterpret_cast<VF>(_mm256_shuffle_ps(t0, t2, 0xEE));
-  c[2] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0x44));
-  c[3] = reinterpret_cast<VF>(_mm256_shuffle_ps(t1, t3, 0xEE));
+  transpose_halves(_mm256_loadu2_m128(p + 12, p), _mm256_loadu2_m128(p + 15, p + 3),
+                   _mm256_loadu2_m128(p + 18, p + 6),
+                   _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 9)), last, 1), c);
 }
 
 // The seen bytes of texels x .. x + 7 as lane masks; none where the row is

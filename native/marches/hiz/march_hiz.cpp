@@ -806,32 +806,19 @@ RayRow ray_row(const MarchSetup& s, int y) {
 }  // namespace
 #endif
 
-void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa isa, RayFields* rays,
-                    unsigned char* made) {
-#if defined(GLINT_WALK_AVX2)
-  if (isa == WalkIsa::Avx2) {
-    hiz_pixel_rays_avx2(ray_row(s, y), xs, n, rays, made);
-    return;
-  }
-#else
-  (void)isa;
-#endif
-  for (int k = 0; k < n; ++k) {
-    Ray ray;
-    made[k] = make_ray(s, xs[k], y, ray);
-    if (made[k]) rays[k] = ray;
-  }
-}
-
-void hiz_sample_rays(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, int y, const int* xs,
-                     const float* offsets, int n, WalkIsa isa, RayFields* rays, unsigned char* made) {
+namespace {
+// The pixels' own rays (offsets null) or the outline samples'.
+void rays_of(const MarchSetup& s, const HizPlanes* planes, const HizCamera* cam, int y, const int* xs,
+             const float* offsets, int n, WalkIsa isa, RayFields* rays, unsigned char* made) {
 #if defined(GLINT_WALK_AVX2)
   if (isa == WalkIsa::Avx2) {
     RayRow r = ray_row(s, y);
-    r.offset = offsets;
-    r.planes = planes.px(0, y);
-    r.inv = cam.inv;
-    r.footprint_spread = kFootprintSpread;
+    if (offsets) {
+      r.offset = offsets;
+      r.planes = planes->px(0, y);
+      r.inv = cam->inv;
+      r.footprint_spread = kFootprintSpread;
+    }
     hiz_pixel_rays_avx2(r, xs, n, rays, made);
     return;
   }
@@ -840,9 +827,21 @@ void hiz_sample_rays(const MarchSetup& s, const HizPlanes& planes, const HizCame
 #endif
   for (int k = 0; k < n; ++k) {
     Ray ray;
-    made[k] = subpixel_ray(s, planes, cam, xs[k], y, offsets[2 * k], offsets[2 * k + 1], ray);
+    made[k] = offsets ? subpixel_ray(s, *planes, *cam, xs[k], y, offsets[2 * k], offsets[2 * k + 1], ray)
+                      : make_ray(s, xs[k], y, ray);
     if (made[k]) rays[k] = ray;
   }
+}
+}  // namespace
+
+void hiz_pixel_rays(const MarchSetup& s, int y, const int* xs, int n, WalkIsa isa, RayFields* rays,
+                    unsigned char* made) {
+  rays_of(s, nullptr, nullptr, y, xs, nullptr, n, isa, rays, made);
+}
+
+void hiz_sample_rays(const MarchSetup& s, const HizPlanes& planes, const HizCamera& cam, int y, const int* xs,
+                     const float* offsets, int n, WalkIsa isa, RayFields* rays, unsigned char* made) {
+  rays_of(s, &planes, &cam, y, xs, offsets, n, isa, rays, made);
 }
 
 // The AVX2 rows take the row's texels but its first and last, the row's ends
