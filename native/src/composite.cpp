@@ -84,19 +84,35 @@ void continue_missing_uv(Image& uv, int rings, int threads) {
   }
 }
 
-void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position) {
+void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position,
+                              int threads) {
   const int w = uv.width, h = uv.height;
   auto hit = [&](int x, int y) { return uv.px(x, y)[2] > 0.0f; };
   // Only the box the hits' footprints can reach is walked: a frame's misses
-  // far from any blurred hit cost nothing.
-  int x0 = w, y0 = h, x1 = -1, y1 = -1;
-  float top = 0.0f;
-  for (int y = 0; y < h; ++y)
+  // far from any blurred hit cost nothing. The hits' box and largest lod, a
+  // row at a time on the workers.
+  struct Row {
+    int x0, x1;
+    float top;
+  };
+  std::vector<Row> rows(static_cast<size_t>(h));
+  parallel_rows(0, h, threads, [&](int y) {
+    Row r{w, -1, 0.0f};
     for (int x = 0; x < w; ++x) {
       if (!hit(x, y)) continue;
-      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
-      top = std::max(top, weight.px(x, y)[3]);
+      r.x0 = std::min(r.x0, x), r.x1 = std::max(r.x1, x);
+      r.top = std::max(r.top, weight.px(x, y)[3]);
     }
+    rows[static_cast<size_t>(y)] = r;
+  });
+  int x0 = w, y0 = h, x1 = -1, y1 = -1;
+  float top = 0.0f;
+  for (int y = 0; y < h; ++y) {
+    const Row& r = rows[static_cast<size_t>(y)];
+    if (r.x1 < 0) continue;
+    x0 = std::min(x0, r.x0), x1 = std::max(x1, r.x1), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    top = std::max(top, r.top);
+  }
   if (x1 < 0 || !(top > 0.0f)) return;
   // Any lod past the image's size reaches the whole image (and an infinite
   // one from an outside caller must not overflow the cast).
@@ -105,46 +121,66 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
   x0 = std::max(0, x0 - reach), y0 = std::max(0, y0 - reach);
   x1 = std::min(w - 1, x1 + reach), y1 = std::min(h - 1, y1 + reach);
   const int bw = x1 - x0 + 1, bh = y1 - y0 + 1;
-  // The distance to the nearest hit; the lod that hit has travels in the
-  // weight's own alpha (a miss's is overwritten), so the walk needs one float
-  // a pixel of the box beside the images (130 MB at 8K, not 260).
-  std::vector<float, PixelAllocator<float>> dist(static_cast<size_t>(bw) * bh);
-  auto at = [&](int x, int y) { return static_cast<size_t>(y - y0) * bw + (x - x0); };
+  // The distance to the nearest hit and the lod that hit has, a float each
+  // per pixel of the box: the two passes below run on one thread, and read
+  // them from two packed arrays rather than the weight's alpha, 16 bytes
+  // apart (a miss's lod is overwritten, a hit's kept).
+  std::vector<float, PixelAllocator<float>> dist(static_cast<size_t>(bw) * bh), lod(dist.size());
   const float inf = std::numeric_limits<float>::infinity();
-  for (int y = y0; y <= y1; ++y)
+  parallel_rows(y0, y1 + 1, threads, [&](int y) {
+    float* d = dist.data() + static_cast<size_t>(y - y0) * bw;
+    float* l = lod.data() + static_cast<size_t>(y - y0) * bw;
     for (int x = x0; x <= x1; ++x) {
       const bool h0 = hit(x, y);
-      dist[at(x, y)] = h0 ? 0.0f : inf;
-      if (!h0) weight.px(x, y)[3] = 0.0f;
+      d[x - x0] = h0 ? 0.0f : inf;
+      l[x - x0] = h0 ? weight.px(x, y)[3] : 0.0f;
     }
+  });
   // Two raster passes of the 3x3 chamfer distance (steps 1 and sqrt 2), each
-  // pixel keeping the lod of the hit it is nearest to.
+  // pixel keeping the lod of the hit it is nearest to. Box coordinates from
+  // here; the checks for the box's edges only on its edge pixels.
   const float diag = 1.41421356f;
-  auto relax = [&](int x, int y, int nx, int ny, float step) {
-    if (nx < x0 || nx > x1 || ny < y0 || ny > y1) return;
-    const size_t i = at(x, y), j = at(nx, ny);
-    if (dist[j] + step < dist[i]) dist[i] = dist[j] + step, weight.px(x, y)[3] = weight.px(nx, ny)[3];
+  auto relax = [&](size_t i, size_t j, float step) {
+    if (dist[j] + step < dist[i]) dist[i] = dist[j] + step, lod[i] = lod[j];
   };
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) {
-      if (dist[at(x, y)] == 0.0f) continue;  // a hit: nothing is nearer
-      relax(x, y, x - 1, y, 1.0f), relax(x, y, x - 1, y - 1, diag);
-      relax(x, y, x, y - 1, 1.0f), relax(x, y, x + 1, y - 1, diag);
+  auto relax_at = [&](int x, int y, int nx, int ny, float step) {
+    if (nx < 0 || nx >= bw || ny < 0 || ny >= bh) return;
+    relax(static_cast<size_t>(y) * bw + x, static_cast<size_t>(ny) * bw + nx, step);
+  };
+  const size_t row = static_cast<size_t>(bw);
+  for (int y = 0; y < bh; ++y)
+    for (int x = 0; x < bw; ++x) {
+      const size_t i = static_cast<size_t>(y) * bw + x;
+      if (dist[i] == 0.0f) continue;  // a hit: nothing is nearer
+      if (y > 0 && x > 0 && x + 1 < bw) {
+        relax(i, i - 1, 1.0f), relax(i, i - row - 1, diag), relax(i, i - row, 1.0f), relax(i, i - row + 1, diag);
+      } else {
+        relax_at(x, y, x - 1, y, 1.0f), relax_at(x, y, x - 1, y - 1, diag);
+        relax_at(x, y, x, y - 1, 1.0f), relax_at(x, y, x + 1, y - 1, diag);
+      }
     }
-  for (int y = y1; y >= y0; --y)
-    for (int x = x1; x >= x0; --x) {
-      if (dist[at(x, y)] == 0.0f) continue;
-      relax(x, y, x + 1, y, 1.0f), relax(x, y, x + 1, y + 1, diag);
-      relax(x, y, x, y + 1, 1.0f), relax(x, y, x - 1, y + 1, diag);
+  for (int y = bh - 1; y >= 0; --y)
+    for (int x = bw - 1; x >= 0; --x) {
+      const size_t i = static_cast<size_t>(y) * bw + x;
+      if (dist[i] == 0.0f) continue;
+      if (y + 1 < bh && x > 0 && x + 1 < bw) {
+        relax(i, i + 1, 1.0f), relax(i, i + row + 1, diag), relax(i, i + row, 1.0f), relax(i, i + row - 1, diag);
+      } else {
+        relax_at(x, y, x + 1, y, 1.0f), relax_at(x, y, x + 1, y + 1, diag);
+        relax_at(x, y, x, y + 1, 1.0f), relax_at(x, y, x - 1, y + 1, diag);
+      }
     }
-  for (int y = y0; y <= y1; ++y)
+  parallel_rows(y0, y1 + 1, threads, [&](int y) {
+    const float* d = dist.data() + static_cast<size_t>(y - y0) * bw;
+    const float* l = lod.data() + static_cast<size_t>(y - y0) * bw;
     for (int x = x0; x <= x1; ++x) {
       if (hit(x, y)) continue;
-      float& lod = weight.px(x, y)[3];
-      const bool keep = lod > 0.0f && dist[at(x, y)] <= std::exp2(lod - 1.0f) * kChamferSlack &&
+      const float m = l[x - x0];
+      const bool keep = m > 0.0f && d[x - x0] <= std::exp2(m - 1.0f) * kChamferSlack &&
                         texel_seen(position.px(x, y)) && is_reflective(specular.px(x, y));
-      if (!keep) lod = 0.0f;
+      weight.px(x, y)[3] = keep ? m : 0.0f;
     }
+  });
 }
 
 void read_inside_outlines(Image& uv, const Image& pos, const Image* back_position, float thickness, int threads) {
@@ -244,7 +280,7 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
     if (any) rough.store(true, std::memory_order_relaxed);
   });
   out.any_rough = rough.load();
-  if (out.any_rough) continue_lod_into_misses(out.weight, out.uv, spec, in.position);
+  if (out.any_rough) continue_lod_into_misses(out.weight, out.uv, spec, in.position, threads);
   // The hidden sides and the lod above came from the trace's own uv; the
   // colour is read inside the objects' outlines.
   read_inside_outlines(out.uv, in.position, in.back_position, opt.thickness, threads);

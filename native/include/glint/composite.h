@@ -49,7 +49,8 @@ void continue_missing_uv(Image& uv, int rings, int threads = 0);
 // unseen or do not reflect. `weight`'s alpha is the lod; vis is uv's third
 // channel.
 constexpr float kChamferSlack = 1.0824f;
-void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position);
+void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specular, const Image& position,
+                              int threads = 0);
 
 // Where the colour stages read a reflection: every reported uv (vis > 0) that
 // lies in a texel on an object's outline moves to the centre of the texel one

@@ -77,10 +77,6 @@ __attribute__((always_inline)) inline VF next_up(VF t) {
   return reinterpret_cast<VF>(up);
 }
 
-}  // namespace
-
-namespace {
-
 // The rays of one group of lanes. Lanes without a ray keep level 0 and t 0,
 // so that their cells (computed and ignored) stay inside the pyramid.
 struct Lanes {
@@ -95,7 +91,7 @@ struct Lanes {
 
 // What one step of a group computes before the texel tests.
 struct Step {
-  VI run, i, j, wl, bx, by, movex, movey;
+  VI run, i, j, bx, by, movex, movey;
   VF vx, vy, te, ne, be;
   VI overlap;
 };
@@ -178,7 +174,7 @@ __attribute__((always_inline)) inline void locate(const Lanes& g, const WalkPyra
   cell_range(pyr.range, level_offset(pyr.offset, level) + j * wl + i, c0, c1);
   // The depth span [min, max] of the two ends meets [c0, c1].
   s.overlap = ((g.nt >= c0 * g.bt) | (ne >= c0 * be)) & ((g.nt <= c1 * g.bt) | (ne <= c1 * be));
-  s.i = i, s.j = j, s.wl = wl, s.bx = bx, s.by = by, s.movex = movex, s.movey = movey;
+  s.i = i, s.j = j, s.bx = bx, s.by = by, s.movex = movex, s.movey = movey;
   s.vx = vx, s.vy = vy, s.te = te, s.ne = ne, s.be = be;
 }
 
