@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -121,64 +122,71 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
   x0 = std::max(0, x0 - reach), y0 = std::max(0, y0 - reach);
   x1 = std::min(w - 1, x1 + reach), y1 = std::min(h - 1, y1 + reach);
   const int bw = x1 - x0 + 1, bh = y1 - y0 + 1;
-  // The distance to the nearest hit and the lod that hit has, a float each
-  // per pixel of the box: the two passes below run on one thread, and read
-  // them from two packed arrays rather than the weight's alpha, 16 bytes
-  // apart (a miss's lod is overwritten, a hit's kept).
-  std::vector<float, PixelAllocator<float>> dist(static_cast<size_t>(bw) * bh), lod(dist.size());
+  // The distance to the nearest hit; the lod that hit has travels in the
+  // weight's own alpha (a miss's is overwritten), so the walk needs one float
+  // a pixel of the box beside the images (130 MB at 8K, not 260).
+  std::vector<float, PixelAllocator<float>> dist(static_cast<size_t>(bw) * bh);
   const float inf = std::numeric_limits<float>::infinity();
   parallel_rows(y0, y1 + 1, threads, [&](int y) {
     float* d = dist.data() + static_cast<size_t>(y - y0) * bw;
-    float* l = lod.data() + static_cast<size_t>(y - y0) * bw;
     for (int x = x0; x <= x1; ++x) {
       const bool h0 = hit(x, y);
       d[x - x0] = h0 ? 0.0f : inf;
-      l[x - x0] = h0 ? weight.px(x, y)[3] : 0.0f;
+      if (!h0) weight.px(x, y)[3] = 0.0f;
     }
   });
   // Two raster passes of the 3x3 chamfer distance (steps 1 and sqrt 2), each
-  // pixel keeping the lod of the hit it is nearest to. Box coordinates from
-  // here; the checks for the box's edges only on its edge pixels.
+  // pixel keeping the lod of the hit it is nearest to: one thread, in order.
+  // Box coordinates from here; a neighbour is an offset in each array, and
+  // the box's edges are checked only on its edge pixels.
   const float diag = 1.41421356f;
-  auto relax = [&](size_t i, size_t j, float step) {
-    if (dist[j] + step < dist[i]) dist[i] = dist[j] + step, lod[i] = lod[j];
+  // Box pixel (x, y)'s distance at dist[y * bw + x], its lod at lod[(y * w + x) * 4].
+  float* lod = weight.px(x0, y0) + 3;
+  const size_t row = static_cast<size_t>(bw), lod_row = static_cast<size_t>(w) * 4;
+  auto relax = [&](size_t i, size_t li, ptrdiff_t dj, ptrdiff_t dl, float step) {
+    if (dist[i + dj] + step < dist[i]) dist[i] = dist[i + dj] + step, lod[li] = lod[li + dl];
   };
-  auto relax_at = [&](int x, int y, int nx, int ny, float step) {
+  auto relax_at = [&](int x, int y, int dx, int dy, float step) {
+    const int nx = x + dx, ny = y + dy;
     if (nx < 0 || nx >= bw || ny < 0 || ny >= bh) return;
-    relax(static_cast<size_t>(y) * bw + x, static_cast<size_t>(ny) * bw + nx, step);
+    relax(static_cast<size_t>(y) * row + x, static_cast<size_t>(y) * lod_row + 4 * static_cast<size_t>(x),
+          dy * static_cast<ptrdiff_t>(row) + dx, dy * static_cast<ptrdiff_t>(lod_row) + 4 * dx, step);
   };
-  const size_t row = static_cast<size_t>(bw);
+  const ptrdiff_t r = static_cast<ptrdiff_t>(row), lr = static_cast<ptrdiff_t>(lod_row);
   for (int y = 0; y < bh; ++y)
     for (int x = 0; x < bw; ++x) {
-      const size_t i = static_cast<size_t>(y) * bw + x;
+      const size_t i = static_cast<size_t>(y) * row + x;
+      const size_t li = static_cast<size_t>(y) * lod_row + 4 * static_cast<size_t>(x);
       if (dist[i] == 0.0f) continue;  // a hit: nothing is nearer
       if (y > 0 && x > 0 && x + 1 < bw) {
-        relax(i, i - 1, 1.0f), relax(i, i - row - 1, diag), relax(i, i - row, 1.0f), relax(i, i - row + 1, diag);
+        relax(i, li, -1, -4, 1.0f), relax(i, li, -r - 1, -lr - 4, diag), relax(i, li, -r, -lr, 1.0f),
+            relax(i, li, -r + 1, -lr + 4, diag);
       } else {
-        relax_at(x, y, x - 1, y, 1.0f), relax_at(x, y, x - 1, y - 1, diag);
-        relax_at(x, y, x, y - 1, 1.0f), relax_at(x, y, x + 1, y - 1, diag);
+        relax_at(x, y, -1, 0, 1.0f), relax_at(x, y, -1, -1, diag);
+        relax_at(x, y, 0, -1, 1.0f), relax_at(x, y, 1, -1, diag);
       }
     }
   for (int y = bh - 1; y >= 0; --y)
     for (int x = bw - 1; x >= 0; --x) {
-      const size_t i = static_cast<size_t>(y) * bw + x;
+      const size_t i = static_cast<size_t>(y) * row + x;
+      const size_t li = static_cast<size_t>(y) * lod_row + 4 * static_cast<size_t>(x);
       if (dist[i] == 0.0f) continue;
       if (y + 1 < bh && x > 0 && x + 1 < bw) {
-        relax(i, i + 1, 1.0f), relax(i, i + row + 1, diag), relax(i, i + row, 1.0f), relax(i, i + row - 1, diag);
+        relax(i, li, 1, 4, 1.0f), relax(i, li, r + 1, lr + 4, diag), relax(i, li, r, lr, 1.0f),
+            relax(i, li, r - 1, lr - 4, diag);
       } else {
-        relax_at(x, y, x + 1, y, 1.0f), relax_at(x, y, x + 1, y + 1, diag);
-        relax_at(x, y, x, y + 1, 1.0f), relax_at(x, y, x - 1, y + 1, diag);
+        relax_at(x, y, 1, 0, 1.0f), relax_at(x, y, 1, 1, diag);
+        relax_at(x, y, 0, 1, 1.0f), relax_at(x, y, -1, 1, diag);
       }
     }
   parallel_rows(y0, y1 + 1, threads, [&](int y) {
     const float* d = dist.data() + static_cast<size_t>(y - y0) * bw;
-    const float* l = lod.data() + static_cast<size_t>(y - y0) * bw;
     for (int x = x0; x <= x1; ++x) {
       if (hit(x, y)) continue;
-      const float m = l[x - x0];
+      float& m = weight.px(x, y)[3];
       const bool keep = m > 0.0f && d[x - x0] <= std::exp2(m - 1.0f) * kChamferSlack &&
                         texel_seen(position.px(x, y)) && is_reflective(specular.px(x, y));
-      weight.px(x, y)[3] = keep ? m : 0.0f;
+      if (!keep) m = 0.0f;
     }
   });
 }
