@@ -82,8 +82,9 @@ void hiz_pixel_rays_avx2(const RayRow& r, const int* xs, int n, RayFields* rays,
   const float w = static_cast<float>(r.width), h = static_cast<float>(r.height);
   for (int k0 = 0; k0 < n; k0 += 8) {
     const int m = n - k0 < 8 ? n - k0 : 8;
-    VI texel{};
-    for (int l = 0; l < 8; ++l) texel[l] = 4 * xs[k0 + (l < m ? l : 0)];
+    VI x{};  // each lane's pixel; lanes past n repeat the first
+    for (int l = 0; l < 8; ++l) x[l] = xs[k0 + (l < m ? l : 0)];
+    const VI texel = 4 * x;
 
     // read_origin(): the texel is seen, its normal finite and not zero.
     VF p[4], nr[3];
@@ -114,9 +115,7 @@ void hiz_pixel_rays_avx2(const RayRow& r, const int* xs, int n, RayFields* rays,
       // plane normal (not the shading one); the point of that plane under
       // the sample, unprojected; kept within the footprint's depth spread.
       VF pn[3];
-      VI planes_at{};
-      for (int l = 0; l < 8; ++l) planes_at[l] = 3 * xs[k0 + (l < m ? l : 0)];
-      for (int c = 0; c < 3; ++c) pn[c] = gather(r.planes, planes_at + c);
+      for (int c = 0; c < 3; ++c) pn[c] = gather(r.planes, 3 * x + c);
       const VF zero = splat(0.0f);
       ok &= finite(pn[0]) & finite(pn[1]) & finite(pn[2]) & ((pn[0] != zero) | (pn[1] != zero) | (pn[2] != zero));
       const float* H = r.inv;
@@ -125,13 +124,13 @@ void hiz_pixel_rays_avx2(const RayRow& r, const int* xs, int n, RayFields* rays,
       for (int c = 0; c < 4; ++c)
         L[c] = pn[0] * splat(H[c]) + pn[1] * splat(H[4 + c]) + pn[2] * splat(H[8 + c]) - kd * splat(H[12 + c]);
       ok &= L[2] != zero;
-      VF ox, oy, px;
+      VF ox, oy;
       for (int l = 0; l < 8; ++l) {
         const int k = k0 + (l < m ? l : 0);
         ox[l] = r.offset[2 * k];
         oy[l] = r.offset[2 * k + 1];
-        px[l] = static_cast<float>(xs[k]);
       }
+      const VF px = __builtin_convertvector(x, VF);
       const VF sx = (px + (splat(0.5f) + ox)) * splat(2.0f / w) - splat(1.0f);
       const VF sy = (splat(static_cast<float>(r.y)) + (splat(0.5f) + oy)) * splat(2.0f / h) - splat(1.0f);
       const VF sz = -(L[0] * sx + L[1] * sy + L[3]) / L[2];

@@ -783,11 +783,7 @@ bool sample_start(void* ctx, int lane, WalkRay& w) {
   return false;
 }
 
-
-}  // namespace
-
 #if defined(GLINT_WALK_AVX2)
-namespace {
 RayRow ray_row(const MarchSetup& s, int y) {
   RayRow r;
   r.position = s.position->px(0, y);
@@ -803,10 +799,8 @@ RayRow ray_row(const MarchSetup& s, int y) {
   r.y = y;
   return r;
 }
-}  // namespace
 #endif
 
-namespace {
 // The pixels' own rays (offsets null) or the outline samples'.
 void rays_of(const MarchSetup& s, const HizPlanes* planes, const HizCamera* cam, int y, const int* xs,
              const float* offsets, int n, WalkIsa isa, RayFields* rays, unsigned char* made) {

@@ -128,7 +128,7 @@ std::vector<std::vector<int>> outline_pixels(const TraceInputs& in, const Image&
     std::vector<unsigned char> near(static_cast<size_t>(width) + 8, 0);  // whole 8-byte words to scan
     const unsigned char* c = padded.data() + 1;
     unsigned char* nr = near.data();
-    const int n = width;
+    const int n = width;  // a local bound: the captured width would be reloaded after each store
     for (int x = 0; x < n; ++x) {
       const unsigned char m = c[x] ^ 1;
       nr[x] = static_cast<unsigned char>((c[x - 1] == m) | (c[x + 1] == m) | (up[x] == m) | (down[x] == m));
