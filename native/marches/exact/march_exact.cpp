@@ -163,17 +163,16 @@ struct Frame {
 struct Query {
   D3 origin, dir;
   double tfar;
-  bool found = false;
-  double t = 0.0;  // where it met a surface, when found
+  bool found = false;  // it met a surface other than its own
+  double t = 0.0;      // where, for Own::Skip
 };
 
 // A query on its way through Embree, in the scene's frame.
 struct Live {
   D3 origin;
   float dir[3];
-  double scale;  // of the surface tolerance
-  double tnear;
-  uint32_t query;
+  double tolerance;  // kSurfaceTolerance x the origin's magnitude
+  double own_t;      // the t at which the ray has gone half the tolerance
 };
 
 // What a ray does about hits on its own surface.
@@ -183,13 +182,19 @@ enum class Own {
   // BVH as one frustum (Embree's coherent mode). Half of the floor's rays meet
   // their own triangle first, and asking again cost a second traversal each.
   Skip,
-  // The rays back to the camera, one per hit on screen: such a hit ends the
-  // traversal and the ray is asked again from just past it, eight times at
-  // most, each lane traversed as a ray of its own. The coherent traversal
-  // settles exact distance ties its own way (27 pixels of the orthographic
-  // sample, whose camera rays run exactly along an axis, came out otherwise),
-  // and these rays are too few for it to matter to the time.
-  Retry,
+  // The rays back to the camera, one per hit on screen, ask only whether
+  // any other surface lies on the way: Embree's occlusion query, which stops
+  // at the first hit the same filter lets through. Each lane is traversed as
+  // a ray of its own: the coherent traversal settles exact distance ties its
+  // own way (27 pixels of the orthographic sample, whose camera rays run
+  // exactly along an axis, came out otherwise).
+  Block,
+};
+
+// A mirror ray and where its report goes.
+struct MirrorRay {
+  V3 from, unit_from, normal;
+  float* out;
 };
 
 #if GLINT_EMBREE_MAJOR >= 4
@@ -206,12 +211,31 @@ struct SkipContext {
   const Live* lanes;  // indexed by the ray's id: its lane
 };
 
+// Embree calls this for every hit between tnear and the best so far. Is it
+// the ray's own surface? The origin's distance from the plane through the hit
+// along Embree's normal Ng is t |Ng.d| / |Ng|, no more than t |d|, and it
+// agrees with the stored plane's (Planes::distance) to the hit's rounding, far
+// below the tolerance. So the rays start at own_t, where they have gone half
+// the tolerance: the hits before it, 70% of the bench floor's (its own
+// neighbouring triangles at t ~ 0), are the ray's own surface and never reach
+// this. A hit at more than twice the tolerance is another surface. Only those
+// in between, 65 of 1.6 million on the bench floor, read the plane table,
+// a cache miss each (32 MB at a million triangles), which decides as before.
 void skip_own_surface(const RTCFilterFunctionNArguments* args) {
   const auto* c = reinterpret_cast<const SkipContext*>(args->context);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] == 0) continue;
     const Live& r = c->lanes[RTCRayN_id(args->ray, args->N, i)];
-    if (!(c->planes->distance(RTCHitN_primID(args->hit, args->N, i), r.origin) > kSurfaceTolerance * r.scale))
+    const double t = RTCRayN_tfar(args->ray, args->N, i);
+    if (t <= r.own_t) {  // t |d| <= tolerance / 2
+      args->valid[i] = 0;
+      continue;
+    }
+    const double nx = RTCHitN_Ng_x(args->hit, args->N, i), ny = RTCHitN_Ng_y(args->hit, args->N, i),
+                 nz = RTCHitN_Ng_z(args->hit, args->N, i);
+    const double along = t * (nx * r.dir[0] + ny * r.dir[1] + nz * r.dir[2]), n2 = nx * nx + ny * ny + nz * nz;
+    if (along * along > 4.0 * r.tolerance * r.tolerance * n2) continue;  // more than twice the tolerance
+    if (!(c->planes->distance(RTCHitN_primID(args->hit, args->N, i), r.origin) > r.tolerance))
       args->valid[i] = 0;
   }
 }
@@ -227,9 +251,15 @@ struct Packet<8> {
   static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectArguments* a) {
     rtcIntersect8(valid, s, rh, a);
   }
+  static void occluded(const int* valid, RTCScene s, RayHit* rh, RTCOccludedArguments* a) {
+    rtcOccluded8(valid, s, &rh->ray, a);
+  }
 #else
   static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
     rtcIntersect8(valid, s, c, rh);
+  }
+  static void occluded(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
+    rtcOccluded8(valid, s, c, &rh->ray);
   }
 #endif
 };
@@ -240,32 +270,50 @@ struct Packet<16> {
   static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectArguments* a) {
     rtcIntersect16(valid, s, rh, a);
   }
+  static void occluded(const int* valid, RTCScene s, RayHit* rh, RTCOccludedArguments* a) {
+    rtcOccluded16(valid, s, &rh->ray, a);
+  }
 #else
   static void intersect(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
     rtcIntersect16(valid, s, c, rh);
   }
+  static void occluded(const int* valid, RTCScene s, RayHit* rh, RTCIntersectContext* c) {
+    rtcOccluded16(valid, s, c, &rh->ray);
+  }
 #endif
 };
 
+// Own::Skip: the nearest hit, coherent; Own::Block: any hit, ray by ray.
+// Both through skip_own_surface. An occluded lane comes back with tfar -inf.
 template <int K>
-void intersect(const int* valid, RTCScene scene, typename Packet<K>::RayHit* rh, SkipContext* ctx, Own own) {
+void query(const int* valid, RTCScene scene, typename Packet<K>::RayHit* rh, SkipContext* ctx, Own own) {
 #if GLINT_EMBREE_MAJOR >= 4
   rtcInitRayQueryContext(&ctx->base);
-  RTCIntersectArguments args;
-  rtcInitIntersectArguments(&args);
-  args.context = &ctx->base;
   if (own == Own::Skip) {
+    RTCIntersectArguments args;
+    rtcInitIntersectArguments(&args);
+    args.context = &ctx->base;
     args.flags = static_cast<RTCRayQueryFlags>(RTC_RAY_QUERY_FLAG_COHERENT | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
     args.filter = &skip_own_surface;
+    Packet<K>::intersect(valid, scene, rh, &args);
+  } else {
+    RTCOccludedArguments args;
+    rtcInitOccludedArguments(&args);
+    args.context = &ctx->base;
+    args.flags = static_cast<RTCRayQueryFlags>(RTC_RAY_QUERY_FLAG_INCOHERENT | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
+    args.filter = &skip_own_surface;
+    Packet<K>::occluded(valid, scene, rh, &args);
   }
-  Packet<K>::intersect(valid, scene, rh, &args);
 #else
   rtcInitIntersectContext(&ctx->base);
+  ctx->base.filter = &skip_own_surface;
   if (own == Own::Skip) {
     ctx->base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    ctx->base.filter = &skip_own_surface;
+    Packet<K>::intersect(valid, scene, rh, &ctx->base);
+  } else {
+    ctx->base.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    Packet<K>::occluded(valid, scene, rh, &ctx->base);
   }
-  Packet<K>::intersect(valid, scene, rh, &ctx->base);
 #endif
 }
 
@@ -422,22 +470,18 @@ class ExactScene::Impl {
     return static_cast<unsigned*>(rtcGetGeometryBufferData(geometry_.get(), RTC_BUFFER_TYPE_INDEX, 0));
   }
 
-  // For each query, the first hit along origin + t * dir (view space) for t
-  // in [0, tfar] that is not on a surface through the origin itself.
-  void first_hits(const Frame& frame, std::vector<Query>& queries, Own own) const {
+  // Each query's ray, origin + t * dir (view space) for t in [0, tfar],
+  // against the surfaces that do not pass through its origin: Own::Skip finds
+  // the first hit, Own::Block whether there is any.
+  void cast(const Frame& frame, std::vector<Query>& queries, Own own) const {
     if (wide_)
-      first_hits_k<16>(frame, queries, own);
+      cast_k<16>(frame, queries, own);
     else
-      first_hits_k<8>(frame, queries, own);
+      cast_k<8>(frame, queries, own);
   }
   template <int K>
-  void first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const;
+  void cast_k(const Frame& frame, std::vector<Query>& queries, Own own) const;
   // The mirror rays of row y, then the rays back to the camera from their hits.
-  // A mirror ray and where its report goes.
-  struct MirrorRay {
-    V3 from, unit_from, normal;
-    float* out;
-  };
   // Each ray's report into its `out`, (0, 0, 0, 0) where it finds nothing
   // the camera sees.
   void trace_rays(const Frame& frame, const MarchSetup& s, const std::vector<MirrorRay>& rays) const;
@@ -459,67 +503,51 @@ class ExactScene::Impl {
 };
 
 template <int K>
-void ExactScene::Impl::first_hits_k(const Frame& frame, std::vector<Query>& queries, Own own) const {
+void ExactScene::Impl::cast_k(const Frame& frame, std::vector<Query>& queries, Own own) const {
   // Neighbouring pixels' rays go to Embree K at a time and share the BVH's
-  // upper levels. A packet is filled from the rays still looking, so a ray
-  // asked again (Own::Retry) waits for the next round instead of leaving its
-  // lane empty; each ray meets the same sequence of queries as if sent alone.
-  std::vector<Live> live, next;
-  live.reserve(queries.size());
-  for (uint32_t i = 0; i < queries.size(); ++i) {
-    Query& q = queries[i];
-    q.found = false;
-    Live r;
-    r.origin = frame.point(q.origin);
-    const D3 dir = frame.direction(q.dir);
-    r.dir[0] = float(dir.x), r.dir[1] = float(dir.y), r.dir[2] = float(dir.z);
-    r.scale = std::max(norm(q.origin), norm(r.origin)) + 1e-30;
-    r.tnear = 0.0;
-    r.query = i;
-    live.push_back(r);
-  }
-  // A handful of coplanar neighbours at most; past that the ray is skimming
-  // its own surface and reflects nothing.
-  for (int attempt = 0; attempt < 8 && !live.empty(); ++attempt) {
-    next.clear();
-    for (size_t first = 0; first < live.size(); first += K) {
-      const size_t n = std::min<size_t>(K, live.size() - first);
-      alignas(64) typename Packet<K>::RayHit rh;
-      alignas(64) int valid[K];
-      for (size_t k = 0; k < size_t(K); ++k) {
-        valid[k] = k < n ? -1 : 0;
-        if (k >= n) continue;
-        const Live& r = live[first + k];
-        rh.ray.org_x[k] = float(r.origin.x), rh.ray.org_y[k] = float(r.origin.y), rh.ray.org_z[k] = float(r.origin.z);
-        rh.ray.dir_x[k] = r.dir[0], rh.ray.dir_y[k] = r.dir[1], rh.ray.dir_z[k] = r.dir[2];
-        rh.ray.tnear[k] = float(r.tnear);
-        rh.ray.tfar[k] = float(queries[r.query].tfar);
-        rh.ray.time[k] = 0.0f;
-        rh.ray.mask[k] = 0xFFFFFFFFu;
-        rh.ray.id[k] = static_cast<unsigned>(k);
-        rh.ray.flags[k] = 0;
-        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
-      }
-      SkipContext ctx;
-      ctx.planes = &planes_;
-      ctx.lanes = &live[first];
-      intersect<K>(valid, scene_.get(), &rh, &ctx, own);
-      for (size_t k = 0; k < n; ++k) {
-        Live& r = live[first + k];
-        Query& q = queries[r.query];
-        if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-        if (own == Own::Skip || planes_.distance(rh.hit.primID[k], r.origin) > kSurfaceTolerance * r.scale) {
-          q.found = true;
-          q.t = rh.ray.tfar[k];
-          continue;
-        }
-        // Step just past this hit: the next float of t, scaled so that it moves.
-        r.tnear = std::nextafter(rh.ray.tfar[k], std::numeric_limits<float>::infinity());
-        if (r.tnear < q.tfar) next.push_back(r);
+  // upper levels.
+  for (size_t first = 0; first < queries.size(); first += K) {
+    const size_t n = std::min<size_t>(K, queries.size() - first);
+    alignas(64) typename Packet<K>::RayHit rh;
+    alignas(64) int valid[K];
+    Live lanes[K];
+    for (size_t k = 0; k < size_t(K); ++k) {
+      valid[k] = k < n ? -1 : 0;
+      if (k >= n) continue;
+      const Query& q = queries[first + k];
+      Live& r = lanes[k];
+      r.origin = frame.point(q.origin);
+      const D3 dir = frame.direction(q.dir);
+      r.dir[0] = float(dir.x), r.dir[1] = float(dir.y), r.dir[2] = float(dir.z);
+      r.tolerance = kSurfaceTolerance * (std::max(norm(q.origin), norm(r.origin)) + 1e-30);
+      r.own_t = 0.5 * r.tolerance / (norm(D3{r.dir[0], r.dir[1], r.dir[2]}) + 1e-300);
+      rh.ray.org_x[k] = float(r.origin.x), rh.ray.org_y[k] = float(r.origin.y), rh.ray.org_z[k] = float(r.origin.z);
+      rh.ray.dir_x[k] = r.dir[0], rh.ray.dir_y[k] = r.dir[1], rh.ray.dir_z[k] = r.dir[2];
+      // The filter drops every hit before own_t: Embree need not report them.
+      float tnear = float(r.own_t);
+      if (double(tnear) > r.own_t) tnear = std::nextafter(tnear, 0.0f);
+      rh.ray.tnear[k] = tnear;
+      rh.ray.tfar[k] = float(q.tfar);
+      rh.ray.time[k] = 0.0f;
+      rh.ray.mask[k] = 0xFFFFFFFFu;
+      rh.ray.id[k] = static_cast<unsigned>(k);
+      rh.ray.flags[k] = 0;
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    SkipContext ctx;
+    ctx.planes = &planes_;
+    ctx.lanes = lanes;
+    query<K>(valid, scene_.get(), &rh, &ctx, own);
+    for (size_t k = 0; k < n; ++k) {
+      Query& q = queries[first + k];
+      if (own == Own::Block) {
+        q.found = rh.ray.tfar[k] == -std::numeric_limits<float>::infinity();
+      } else {
+        q.found = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+        if (q.found) q.t = rh.ray.tfar[k];
       }
     }
-    live.swap(next);
   }
 }
 
@@ -561,6 +589,7 @@ Sight camera_ray(const MarchSetup& s, D3 hit, Query& back) {
 void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y,
                                  Image& out) const {
   std::vector<MirrorRay> rays;
+  rays.reserve(out.width);
   for (int x = 0; x < out.width; ++x) {
     float* o = out.px(x, y);
     o[0] = o[1] = o[2] = o[3] = 0.0f;
@@ -634,6 +663,7 @@ void ExactScene::Impl::trace_rays(const Frame& frame, const MarchSetup& s, const
   using cpu::clip_row;
   std::vector<Query> mirror, back;
   std::vector<float*> mirror_x, back_x;
+  mirror.reserve(rays.size()), mirror_x.reserve(rays.size());
   for (const MirrorRay& r : rays) {
     float* o = r.out;
     o[0] = o[1] = o[2] = o[3] = 0.0f;
@@ -642,7 +672,7 @@ void ExactScene::Impl::trace_rays(const Frame& frame, const MarchSetup& s, const
     mirror.push_back(Query{d3(r.from), d3(pivot), s.opt.max_distance});
     mirror_x.push_back(o);
   }
-  first_hits(frame, mirror, Own::Skip);
+  cast(frame, mirror, Own::Skip);
   for (size_t i = 0; i < mirror.size(); ++i) {
     const Query& q = mirror[i];
     if (!q.found) continue;
@@ -665,7 +695,7 @@ void ExactScene::Impl::trace_rays(const Frame& frame, const MarchSetup& s, const
     float* o = mirror_x[i];
     o[0] = float(u), o[1] = float(v), o[2] = o[3] = 1.0f;
   }
-  first_hits(frame, back, Own::Retry);
+  cast(frame, back, Own::Block);
   for (size_t i = 0; i < back.size(); ++i) {
     if (!back[i].found) continue;
     float* o = back_x[i];
