@@ -172,7 +172,7 @@ struct Live {
   D3 origin;
   float dir[3];
   double tolerance;  // kSurfaceTolerance x the origin's magnitude
-  double own_t;      // the t at which the ray has gone half the tolerance
+  float own_t;       // a t at which the ray has gone at most half the tolerance
 };
 
 // What a ray does about hits on its own surface.
@@ -191,10 +191,20 @@ enum class Own {
   Block,
 };
 
-// A mirror ray and where its report goes.
-struct MirrorRay {
-  V3 from, unit_from, normal;
-  float* out;
+// A batch of mirror rays, each with where its report goes.
+struct MirrorRays {
+  std::vector<Query> rays;
+  std::vector<float*> out;
+  explicit MirrorRays(size_t n) { rays.reserve(n), out.reserve(n); }
+  // The camera's ray `unit_from`, mirrored about `normal` at `from`, up to
+  // max_distance; its report into `o`, zeroed here.
+  void add(V3 from, V3 unit_from, V3 normal, float* o, double max_distance) {
+    o[0] = o[1] = o[2] = o[3] = 0.0f;
+    const V3 pivot = cpu::normalize(cpu::reflect(unit_from, normal));
+    if (!cpu::finite(pivot)) return;
+    rays.push_back(Query{d3(from), d3(pivot), max_distance});
+    out.push_back(o);
+  }
 };
 
 #if GLINT_EMBREE_MAJOR >= 4
@@ -484,7 +494,7 @@ class ExactScene::Impl {
   // The mirror rays of row y, then the rays back to the camera from their hits.
   // Each ray's report into its `out`, (0, 0, 0, 0) where it finds nothing
   // the camera sees.
-  void trace_rays(const Frame& frame, const MarchSetup& s, const std::vector<MirrorRay>& rays) const;
+  void trace_rays(const Frame& frame, const MarchSetup& s, MirrorRays& mirror) const;
   void trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y, Image& out) const;
   // antialias > 0: the outline pixels of row y (cpu::outline_pixels()),
   // each with k more rays from inside it, resolved into `out`.
@@ -519,14 +529,17 @@ void ExactScene::Impl::cast_k(const Frame& frame, std::vector<Query>& queries, O
       r.origin = frame.point(q.origin);
       const D3 dir = frame.direction(q.dir);
       r.dir[0] = float(dir.x), r.dir[1] = float(dir.y), r.dir[2] = float(dir.z);
-      r.tolerance = kSurfaceTolerance * (std::max(norm(q.origin), norm(r.origin)) + 1e-30);
-      r.own_t = 0.5 * r.tolerance / (norm(D3{r.dir[0], r.dir[1], r.dir[2]}) + 1e-300);
+      const double scale = frame.identity ? norm(q.origin) : std::max(norm(q.origin), norm(r.origin));
+      r.tolerance = kSurfaceTolerance * (scale + 1e-30);
+      // Below half the tolerance over |d| by more than float rounding: the
+      // filter's first test and tnear need only a bound, not the value.
+      const float d2 = r.dir[0] * r.dir[0] + r.dir[1] * r.dir[1] + r.dir[2] * r.dir[2];
+      r.own_t = float(0.5 * r.tolerance) / std::sqrt(d2) * 0.999f;
+      if (!(r.own_t >= 0.0f)) r.own_t = 0.0f;  // a zero or non-finite direction
       rh.ray.org_x[k] = float(r.origin.x), rh.ray.org_y[k] = float(r.origin.y), rh.ray.org_z[k] = float(r.origin.z);
       rh.ray.dir_x[k] = r.dir[0], rh.ray.dir_y[k] = r.dir[1], rh.ray.dir_z[k] = r.dir[2];
       // The filter drops every hit before own_t: Embree need not report them.
-      float tnear = float(r.own_t);
-      if (double(tnear) > r.own_t) tnear = std::nextafter(tnear, 0.0f);
-      rh.ray.tnear[k] = tnear;
+      rh.ray.tnear[k] = r.own_t;
       rh.ray.tfar[k] = float(q.tfar);
       rh.ray.time[k] = 0.0f;
       rh.ray.mask[k] = 0xFFFFFFFFu;
@@ -588,15 +601,14 @@ Sight camera_ray(const MarchSetup& s, D3 hit, Query& back) {
 
 void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const Image* specular, int y,
                                  Image& out) const {
-  std::vector<MirrorRay> rays;
-  rays.reserve(out.width);
+  MirrorRays rays(out.width);
   for (int x = 0; x < out.width; ++x) {
     float* o = out.px(x, y);
     o[0] = o[1] = o[2] = o[3] = 0.0f;
     if (specular && !is_reflective(specular->px(x, y))) continue;
     V3 from, unit_from, normal;
     if (!cpu::read_origin(s, x, y, from, unit_from, normal)) continue;
-    rays.push_back(MirrorRay{from, unit_from, normal, o});
+    rays.add(from, unit_from, normal, o, s.opt.max_distance);
   }
   trace_rays(frame, s, rays);
 }
@@ -634,7 +646,7 @@ void ExactScene::Impl::antialias_row(const Frame& frame, const MarchSetup& s, co
   if (edges.empty()) return;
   const int w = out.width, h = out.height;
   std::vector<float> samples(edges.size() * static_cast<size_t>(k) * 4);
-  std::vector<MirrorRay> rays;
+  MirrorRays rays(edges.size() * static_cast<size_t>(k));
   for (size_t e = 0; e < edges.size(); ++e) {
     const int x = edges[e];
     const float* c = out.px(x, y);
@@ -649,7 +661,7 @@ void ExactScene::Impl::antialias_row(const Frame& frame, const MarchSetup& s, co
                           from, normal, at) ||
           !cpu::incident_direction(s, at, incident))
         continue;
-      rays.push_back(MirrorRay{at, incident, normal, o});
+      rays.add(at, incident, normal, o, s.opt.max_distance);
     }
   }
   trace_rays(frame, s, rays);
@@ -659,19 +671,12 @@ void ExactScene::Impl::antialias_row(const Frame& frame, const MarchSetup& s, co
   }
 }
 
-void ExactScene::Impl::trace_rays(const Frame& frame, const MarchSetup& s, const std::vector<MirrorRay>& rays) const {
+void ExactScene::Impl::trace_rays(const Frame& frame, const MarchSetup& s, MirrorRays& rays) const {
   using cpu::clip_row;
-  std::vector<Query> mirror, back;
-  std::vector<float*> mirror_x, back_x;
-  mirror.reserve(rays.size()), mirror_x.reserve(rays.size());
-  for (const MirrorRay& r : rays) {
-    float* o = r.out;
-    o[0] = o[1] = o[2] = o[3] = 0.0f;
-    const V3 pivot = cpu::normalize(cpu::reflect(r.unit_from, r.normal));
-    if (!cpu::finite(pivot)) continue;
-    mirror.push_back(Query{d3(r.from), d3(pivot), s.opt.max_distance});
-    mirror_x.push_back(o);
-  }
+  std::vector<Query>& mirror = rays.rays;
+  const std::vector<float*>& mirror_x = rays.out;
+  std::vector<Query> back;
+  std::vector<float*> back_x;
   cast(frame, mirror, Own::Skip);
   for (size_t i = 0; i < mirror.size(); ++i) {
     const Query& q = mirror[i];
