@@ -293,6 +293,16 @@ struct Packet<16> {
 #endif
 };
 
+#if GLINT_EMBREE_MAJOR >= 4
+// What both kinds of query take in Embree 4's argument structs.
+template <class Args>
+void filtered(Args& args, RTCRayQueryContext* context, RTCRayQueryFlags coherence) {
+  args.context = context;
+  args.flags = static_cast<RTCRayQueryFlags>(coherence | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
+  args.filter = &skip_own_surface;
+}
+#endif
+
 // Own::Skip: the nearest hit, coherent; Own::Block: any hit, ray by ray.
 // Both through skip_own_surface. An occluded lane comes back with tfar -inf.
 template <int K>
@@ -302,16 +312,12 @@ void query(const int* valid, RTCScene scene, typename Packet<K>::RayHit* rh, Ski
   if (own == Own::Skip) {
     RTCIntersectArguments args;
     rtcInitIntersectArguments(&args);
-    args.context = &ctx->base;
-    args.flags = static_cast<RTCRayQueryFlags>(RTC_RAY_QUERY_FLAG_COHERENT | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
-    args.filter = &skip_own_surface;
+    filtered(args, &ctx->base, RTC_RAY_QUERY_FLAG_COHERENT);
     Packet<K>::intersect(valid, scene, rh, &args);
   } else {
     RTCOccludedArguments args;
     rtcInitOccludedArguments(&args);
-    args.context = &ctx->base;
-    args.flags = static_cast<RTCRayQueryFlags>(RTC_RAY_QUERY_FLAG_INCOHERENT | RTC_RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER);
-    args.filter = &skip_own_surface;
+    filtered(args, &ctx->base, RTC_RAY_QUERY_FLAG_INCOHERENT);
     Packet<K>::occluded(valid, scene, rh, &args);
   }
 #else
