@@ -70,6 +70,12 @@ TICK_SECONDS = 0.2
 # How often it hands the core's idle pooled buffers back (glint_core.buffer_pool):
 # between renders nothing else in the core runs to notice they went idle.
 TRIM_SECONDS = 10.0
+# Where the window draws nothing during the export (host.draws_during_export),
+# render_pre waits up to this long for the panel to draw Cancel Glint first,
+# when the panel drew in the last PANEL_SEEN_SECONDS (it is likely on screen):
+# a tick (TICK_SECONDS) tags it for redraw, and the draw follows at once.
+PANEL_WAIT_SECONDS = 0.3
+PANEL_SEEN_SECONDS = 120.0
 
 
 def _enabled(scene) -> bool:
@@ -97,6 +103,8 @@ def _repair_setup(scene_name: str) -> None:
 def on_render_init(scene, *args):
     global _render
     _render = None
+    STATE.rendering = False
+    STATE.panel_drawn.clear()
     if not _enabled(scene):
         return
     job = _render = RenderJob(scene.name)
@@ -131,6 +139,8 @@ def on_render_init(scene, *args):
     own = engines.own_reflections_note(scene)
     if own:
         log(own)
+    STATE.rendering = True
+    STATE.touch()
 
 
 def _region_text(report) -> str:
@@ -154,6 +164,7 @@ def on_render_pre(scene, *args):
         return
     job.target = (scene.frame_current, round(scene.frame_subframe, 6))
     job.done = False
+    _let_the_panel_draw()
     try:
         # A frame Glint does not handle passes through. Only debug views and the
         # layers EXR show more than the UV image lets through: then every image is zeroed.
@@ -162,6 +173,16 @@ def on_render_pre(scene, *args):
     except Exception as exc:
         traceback.print_exc()
         log(f"could not clear Glint's images ({type(exc).__name__}: {exc})")
+
+
+def _let_the_panel_draw() -> None:
+    """On a Blender that draws nothing while the export runs, give the panel,
+    if it is on screen, the moment to draw Cancel Glint before the export."""
+    if bpy.app.background or host.draws_during_export() or not STATE.rendering:
+        return
+    if time.monotonic() - STATE.panel_drawn_at > PANEL_SEEN_SECONDS:
+        return
+    STATE.panel_drawn.wait(PANEL_WAIT_SECONDS)
 
 
 @persistent
@@ -266,6 +287,9 @@ def _main_thread_tick():
     (status line, progress, the Cancel button) when the state changed."""
     if not bpy.app.is_job_running("RENDER"):
         _run_queue(STATE.after_render_queue)
+        if STATE.rendering:  # a render that ended without render_complete or render_cancel
+            STATE.rendering = False
+            STATE.touch()
     now = time.monotonic()
     if now - _seen["trimmed"] >= TRIM_SECONDS:
         _seen["trimmed"] = now
@@ -287,6 +311,7 @@ def on_render_end(scene, *args):
     global _render
     if _render is not None and _render.scene == scene.name:
         _render = None
+        STATE.rendering = False
         STATE.touch()
 
 

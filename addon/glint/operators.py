@@ -32,7 +32,7 @@ class GLINT_OT_retry_native(bpy.types.Operator):
 
 
 class GLINT_OT_cancel(bpy.types.Operator):
-    """Stop Glint's export of the frame being rendered (the frame renders without reflections)"""
+    """Stop Glint's work for the render under way (its frames render without reflections)"""
 
     bl_idname = "glint.cancel"
     bl_label = "Cancel Glint"

@@ -41,7 +41,15 @@ class _State:
         self.last: Optional[FrameReport] = None
         self.messages: List[str] = []
         self.cancel = threading.Event()
-        self.busy = False
+        self.busy = False  # a frame's export and trace are running
+        # A render with Glint on is under way (render_init to its end): the
+        # panel offers Cancel Glint from then on, not only while busy, since
+        # Blender 5.x draws nothing while the export runs (handlers.on_render_pre).
+        self.rendering = False
+        # Set when the panel has drawn during that render; panel_drawn_at, when
+        # it last drew at all (time.monotonic()): whether it is on screen.
+        self.panel_drawn = threading.Event()
+        self.panel_drawn_at = float("-inf")
         # "export 40% (...)" while a render's export reports progress, else "".
         self.progress = ""
         # Bumped on every change the panel shows: the main thread redraws on a change.

@@ -1,6 +1,8 @@
 """Render Properties > Glint: the switch, quality, backend, debug views, status."""
 from __future__ import annotations
 
+import time
+
 import bpy
 
 from . import compositor, native
@@ -59,10 +61,13 @@ class GLINT_PT_render(bpy.types.Panel):
                 layout.label(text=last.message)
             if last.timings_ms:
                 layout.label(text=", ".join(f"{k} {v:.0f} ms" for k, v in last.timings_ms.items()))
-        if STATE.busy:
-            if STATE.progress:
-                layout.label(text=STATE.progress, icon="TIME")
+        if STATE.busy and STATE.progress:
+            layout.label(text=STATE.progress, icon="TIME")
+        if STATE.busy or STATE.rendering:
             layout.operator("glint.cancel", icon="CANCEL")
+        STATE.panel_drawn_at = time.monotonic()
+        if STATE.rendering:
+            STATE.panel_drawn.set()
 
 
 class _GlintSubPanel:

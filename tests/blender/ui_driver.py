@@ -9,7 +9,8 @@ mirror_objects [names] (their vertices and their mirror images in z = 0 through
 Blender's world_to_camera_view, into the result), screenshot (bool, default true),
 timeout (seconds per render), renders: a list of steps, one F12 each, with keys
   python            code run on the main thread just before the F12 (a user's edit)
-  cancel_when_busy  press Glint's Cancel button once the panel has drawn the export's progress
+  cancel_when_busy  press Glint's Cancel button during the export: true, once the panel has
+                    drawn the export's progress; "drawn", once it has drawn the button
   check             a Python expression evaluated after the render, its value recorded
   animation         render the frame range (Ctrl F12) instead of one frame
 
@@ -149,7 +150,8 @@ def _open_glint_panel():
         cur = _current()
         if cur is not None:
             cur["panel_draws"].append({"t": _now(), "status": st.last.status if st.last else None,
-                                       "busy": st.busy, "progress": st.progress})
+                                       "busy": st.busy, "progress": st.progress,
+                                       "cancel": st.busy or st.rendering})
 
     ui.GLINT_PT_render.draw = recorded_draw
     for cls in ui.CLASSES:
@@ -276,8 +278,12 @@ def _tick():
         return 0.05
     if phase == "rendering":
         step, cur, st = RENDERS[i], _current(), _glint_state()
-        shown = any(d["progress"] for d in cur["panel_draws"])
-        if step.get("cancel_when_busy") and st is not None and st.busy and shown and not state.get("cancelled"):
+        # True: once the panel has drawn the export's progress; "drawn": once it has
+        # drawn the Cancel button in this render (Blender 5.x draws nothing new
+        # while the export runs).
+        when = step.get("cancel_when_busy")
+        shown = any(d["progress"] if when is True else d["cancel"] for d in cur["panel_draws"])
+        if when and st is not None and st.busy and shown and not state.get("cancelled"):
             # What the panel's "Cancel Glint" button runs, on the main thread, mid-export.
             # Called with no context override: Blender 3.4 looks a Python override
             # up without the GIL when another thread runs Python, and a render

@@ -8,9 +8,10 @@
 
 Each difference is chosen by a feature test of the running Blender. The
 version number is read to say, once, that a Blender was not tested, and in
-one place where no feature of the API tells two compositors apart: which
-releases a measured behaviour was measured on (nodes.scale_offset_places_read).
-Nothing outside this package knows a Blender version.
+two places where no feature of the API tells two Blenders apart: which
+releases a measured behaviour was measured on (nodes.scale_offset_places_read,
+draws_during_export below). Nothing outside this package knows a Blender
+version.
 """
 from __future__ import annotations
 
@@ -37,3 +38,12 @@ def untested_note() -> Optional[str]:
     tested = ", ".join(f"{a}.{b}" for a, b in TESTED)
     return (f"Blender {bpy.app.version_string} is not one Glint is tested on ({tested}); "
             "it should work, and a frame it cannot handle renders without reflections")
+
+
+def draws_during_export() -> bool:
+    """Whether Blender's window is redrawn while a handler of the render's
+    depsgraph (``frame_change_post``, where Glint's export runs) is busy.
+    Measured under Xvfb with draw handlers counting (docs/addon.md,
+    Limitations): 3.4 and 4.3 draw, 5.2 does not, although its timers run. No
+    API tells: by version."""
+    return tuple(bpy.app.version[:2]) < (5, 0)
