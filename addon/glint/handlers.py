@@ -178,7 +178,8 @@ def on_render_pre(scene, *args):
 def _let_the_panel_draw() -> None:
     """On a Blender that draws nothing while the export runs, give the panel,
     if it is on screen, the moment to draw Cancel Glint before the export."""
-    if bpy.app.background or host.draws_during_export() or not STATE.rendering:
+    # On the main thread (a script's blocking render) the panel cannot draw meanwhile.
+    if bpy.app.background or host.draws_during_export() or not STATE.rendering or _on_main_thread():
         return
     if time.monotonic() - STATE.panel_drawn_at > PANEL_SEEN_SECONDS:
         return
