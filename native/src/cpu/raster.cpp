@@ -531,7 +531,15 @@ void Rasterizer::shade_band(int band, const DepthRows& rows, const std::vector<T
     }
     return &cache;
   };
+  const size_t row_floats = static_cast<size_t>(width_) * 4;
+  auto zero_row = [&](Image& image, int j) { std::fill(image.px(0, j), image.px(0, j) + row_floats, 0.0f); };
   for (int j = r0; j <= r1; ++j) {
+    // Every texel a row's loops skip stays 0 (run() leaves the outputs unset).
+    zero_row(out_.position, j);
+    zero_row(out_.normal, j);
+    zero_row(out_.specular, j);
+    if (rows.back_winner) zero_row(out_.back_position, j);
+    if (rows.back_winner && in_.back_albedo) zero_row(out_.back_albedo, j);
     const int32_t* win = rows.winner + static_cast<size_t>(j - r0) * width_;
     TriPlane cache;
     int32_t cached = -1;
@@ -606,11 +614,12 @@ GBufferImages Rasterizer::run() {
   const bool back = in_.back_layer;
   const size_t count = in_.mesh.triangle_count();
   // The outputs are most of the memory a call touches (33 MB each at
-  // 1920x1080; the buffer pool keeps them mapped between frames): zero them
-  // on all threads at once, since only covered pixels are written later.
+  // 1920x1080; the buffer pool keeps them mapped between frames). shade_band()
+  // zeroes each row just before it shades it, while the row is in the cache:
+  // zeroed whole up front, every covered texel was written twice.
   Image* images[5] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position, &out_.back_albedo};
   const int outputs = back ? (in_.back_albedo ? 5 : 4) : 3;
-  parallel_rows(0, outputs, threads_, [&](int k) { *images[k] = Image(width_, height_, 0.0f); });
+  for (int k = 0; k < outputs; ++k) *images[k] = Image::uninitialized(width_, height_);
 
   if (count <= kChunk) {
     // The usual case: every triangle set up at once, so each band can be
