@@ -610,10 +610,11 @@ void ExactScene::Impl::trace_row(const Frame& frame, const MarchSetup& s, const 
   MirrorRays rays(out.width);
   for (int x = 0; x < out.width; ++x) {
     float* o = out.px(x, y);
-    o[0] = o[1] = o[2] = o[3] = 0.0f;
-    if (specular && !is_reflective(specular->px(x, y))) continue;
     V3 from, unit_from, normal;
-    if (!cpu::read_origin(s, x, y, from, unit_from, normal)) continue;
+    if ((specular && !is_reflective(specular->px(x, y))) || !cpu::read_origin(s, x, y, from, unit_from, normal)) {
+      o[0] = o[1] = o[2] = o[3] = 0.0f;  // no ray: add() zeroes the others
+      continue;
+    }
     rays.add(from, unit_from, normal, o, s.opt.max_distance);
   }
   trace_rays(frame, s, rays);

@@ -411,6 +411,14 @@ class Rasterizer {
   void shade_band(int band, const DepthRows& rows, const std::vector<TriPlane>* planes);
   void clear_rows(const DepthRows& rows, size_t n) const;
 
+  // The images this call writes: position, normal, specular, then with the
+  // back layer back_position, and with its albedo back_albedo.
+  int output_count() const { return in_.back_layer ? (in_.back_albedo ? 5 : 4) : 3; }
+  Image& output(int k) {
+    Image* images[5] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position, &out_.back_albedo};
+    return *images[k];
+  }
+
   int row0(int band) const { return band * band_rows_; }
   int row1(int band) const { return std::min(height_, row0(band) + band_rows_) - 1; }
 
@@ -532,14 +540,9 @@ void Rasterizer::shade_band(int band, const DepthRows& rows, const std::vector<T
     return &cache;
   };
   const size_t row_floats = static_cast<size_t>(width_) * 4;
-  auto zero_row = [&](Image& image, int j) { std::fill(image.px(0, j), image.px(0, j) + row_floats, 0.0f); };
   for (int j = r0; j <= r1; ++j) {
     // Every texel a row's loops skip stays 0 (run() leaves the outputs unset).
-    zero_row(out_.position, j);
-    zero_row(out_.normal, j);
-    zero_row(out_.specular, j);
-    if (rows.back_winner) zero_row(out_.back_position, j);
-    if (rows.back_winner && in_.back_albedo) zero_row(out_.back_albedo, j);
+    for (int k = 0; k < output_count(); ++k) std::fill(output(k).px(0, j), output(k).px(0, j) + row_floats, 0.0f);
     const int32_t* win = rows.winner + static_cast<size_t>(j - r0) * width_;
     TriPlane cache;
     int32_t cached = -1;
@@ -617,9 +620,7 @@ GBufferImages Rasterizer::run() {
   // 1920x1080; the buffer pool keeps them mapped between frames). shade_band()
   // zeroes each row just before it shades it, while the row is in the cache:
   // zeroed whole up front, every covered texel was written twice.
-  Image* images[5] = {&out_.position, &out_.normal, &out_.specular, &out_.back_position, &out_.back_albedo};
-  const int outputs = back ? (in_.back_albedo ? 5 : 4) : 3;
-  for (int k = 0; k < outputs; ++k) *images[k] = Image::uninitialized(width_, height_);
+  for (int k = 0; k < output_count(); ++k) output(k) = Image::uninitialized(width_, height_);
 
   if (count <= kChunk) {
     // The usual case: every triangle set up at once, so each band can be
