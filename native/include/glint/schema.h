@@ -14,6 +14,7 @@
 // is what it is stays here, beside it. docs/architecture.md lists the other
 // single sources (the table of marches, the presets).
 #pragma once
+#include <algorithm>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
@@ -71,6 +72,11 @@ constexpr float kBehindSlack = 1e-3f;
 // chance that the object still covers the hit, outline_confidence()).
 constexpr float kEdgeFade = 0.075f;
 constexpr float kUncertain = 0.5f;
+// The fade of a hit at (u, v): 0 on the screen's edge, 1 from kEdgeFade in.
+inline float screen_edge_fade(float u, float v) {
+  const float edge = std::min(std::min(u, 1.0f - u), std::min(v, 1.0f - v));
+  return std::min(std::max(edge / kEdgeFade, 0.0f), 1.0f);
+}
 // blocked="occluder": the fourth channel (the hit's own visibility) of a ray
 // that came into an object by the side the camera does not see (its back
 // layer's surface) is this, where an occluder found a texel late has 0

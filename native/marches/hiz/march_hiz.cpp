@@ -42,7 +42,6 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kCellNudge = hiz::kCellNudge;
 constexpr float kPlaneTolerance = hiz::kPlaneTolerance;
 constexpr float kBehindSlack = hiz::kBehindSlack;
-constexpr float kEdgeFade = hiz::kEdgeFade;
 constexpr float kUncertain = hiz::kUncertain;
 constexpr float kEnteredHidden = hiz::kEnteredHidden;
 constexpr float kHiddenShare = hiz::kHiddenShare;
@@ -355,9 +354,7 @@ float outline_confidence(const Image& position, const HizPlanes& normal, const I
 
 // Confidence times the fade at the screen's edges, for a hit at (u, v).
 inline float hit_visibility(float u, float v, float confidence) {
-  const float edge = std::min(std::min(u, 1.0f - u), std::min(v, 1.0f - v));
-  const float fade = std::min(std::max(edge / kEdgeFade, 0.0f), 1.0f);
-  return confidence * fade;
+  return confidence * hiz::screen_edge_fade(u, v);
 }
 
 // Rays made at a time (hiz_pixel_rays()): enough for the AVX2 set-up's
