@@ -214,7 +214,7 @@ def supersampled(v_world, t, mat, cam, exact_scene, w, h, s):
     return box_down(colour, s), box_down(sample(colour, uv), s), box_down(sample(colour, faded), s)
 
 
-def run(size, frames, marches, backend="cpu", supersample=1, read_inside=True):
+def run(size, frames, marches, backend="cpu", supersample=1, read_inside=True, settle=True):
     w, h = size
     v_world, t, mat = scene()
     exact_scene = glint_core.ExactScene(v_world.astype(np.float32), t)
@@ -249,6 +249,12 @@ def run(size, frames, marches, backend="cpu", supersample=1, read_inside=True):
         for m in marches:
             opts = march_options(m)
             uv = glint_core.trace(P, N, proj, specular=S, back_position=B, backend=backend, **opts)
+            if settle and opts.get("march") == "hiz":
+                # The add-on's composite settles the hits hiz was unsure of inside a
+                # reflection (docs/marches.md, *Uncertain shares inside a reflection*);
+                # no hidden side here, so a hit takes its whole fade.
+                none = np.zeros_like(uv)
+                uv = glint_core.settle_uncertain_shares(uv, none, none)[0]
             dims[m] = dimming(uv, floor)
             # The add-on's compositor reads the colour inside the objects' outlines
             # whichever march traced (docs/look-core.md, *Where the colour is read*);
@@ -282,6 +288,9 @@ def main():
     ap.add_argument("--read-at-uv", action="store_true",
                     help="read the frame at the trace's uv everywhere, as before Glint's look read "
                          "outline texels one texel inside their object")
+    ap.add_argument("--no-settle", action="store_true",
+                    help="leave the hits hiz was unsure of as the trace reports them, as before the "
+                         "add-on's composite settled those inside a reflection")
     ap.add_argument("--supersample", type=int, default=1,
                     help="score against the exact reflection of s x s samples per pixel, box-filtered, "
                          "with the frame antialiased the same way (1: one exact ray per pixel)")
@@ -293,7 +302,8 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|")
     for size in args.sizes.split(","):
         w, h = (int(v) for v in size.split("x"))
-        res = run((w, h), args.frames, marches, args.backend, args.supersample, not args.read_at_uv)
+        res = run((w, h), args.frames, marches, args.backend, args.supersample, not args.read_at_uv,
+                  not args.no_settle)
         base = res["exact"]["change"]
         for m in ["exact"] + marches:
             r = res[m]

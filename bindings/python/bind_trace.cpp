@@ -212,7 +212,8 @@ void bind_trace(pyb::module_& m) {
         "'reflective_pixels': pixels traced; 'any_rough': some lod > 0}. `replaced`: the share of the\n"
         "engine's specular the pixel's reflection replaces (vis, or the hidden image's vis).\n"
         "back_albedo: optional float32 [H, W, 4], rasterize()'s back_albedo: adds 'hidden' (hidden_sides():\n"
-        "(albedo, vis) where a ray met an object's hidden side, whose uv then has vis 0) and\n"
+        "(albedo, vis) where a ray met an object's hidden side, whose uv then has vis 0; with the hiz\n"
+        "march also the uncertain shares of settle_uncertain_shares(), whose uv keeps its vis) and\n"
         "'hidden_pixels'. Trace keywords as trace(); nothing is traced when no pixel reflects.");
   m.def(
       "hidden_sides",
@@ -231,6 +232,26 @@ void bind_trace(pyb::module_& m) {
       "(hidden, count) from a trace's uv (u, v, vis, hit vis) with blocked='occluder': where the\n"
       "report is an occluder (vis > 0, hit vis 0) whose texel has a back surface (back_albedo alpha\n"
       "> 0), hidden = (back_albedo rgb, vis): the hidden side the ray entered; 0 elsewhere.");
+  m.def(
+      "settle_uncertain_shares",
+      [](const pyb::handle& uv, const pyb::handle& hidden, const pyb::handle& back_albedo) {
+        Image u = image_from_array(uv, "uv", 0.0f, 4);
+        Image h = image_from_array(hidden, "hidden", 0.0f, 4);
+        const Image a = image_from_array(back_albedo, "back_albedo", 0.0f, 4);
+        uint64_t count = 0;
+        {
+          pyb::gil_scoped_release release;
+          count = settle_uncertain_shares(u, h, a);
+        }
+        return pyb::make_tuple(array_from_image(std::move(u)), array_from_image(std::move(h)), count);
+      },
+      "uv"_a, "hidden"_a, "back_albedo"_a,
+      "(uv, hidden, count): a hiz trace's uv (blocked='occluder') and hidden_sides()'s image, with\n"
+      "the hits the march was unsure of settled from their neighbours where all eight report\n"
+      "something within REUSE_PIXELS of the hit: the rest of the screen-edge fade goes to the\n"
+      "hidden side beside it (hidden = (albedo x share / fade, share)) or else to the hit (vis =\n"
+      "fade). count: the pixels given a hidden share. docs/marches.md, *Uncertain shares inside a\n"
+      "reflection*.");
   m.def(
       "continue_missing_uv",
       [](const pyb::handle& uv, int rings) {

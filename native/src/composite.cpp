@@ -23,6 +23,10 @@ namespace {
 // Pooled (glint/image.h): a frame's masks come back already mapped.
 using Mask = std::vector<unsigned char, PixelAllocator<unsigned char>>;
 
+// A hit's visibility under this share of its screen-edge fade is one its
+// march was unsure of (an outline texel's confidence), not rounding.
+constexpr float kSettledShare = 0.999f;
+
 // No pixel in [x, x + 8) of row y has a known 3x3 neighbour: the ten bytes
 // x - 1 .. x + 8 of rows y - 1 .. y + 1 are all zero. Needs 1 <= x, x + 9 <= w.
 inline bool none_near8(const unsigned char* m, int w, int h, int x, int y) {
@@ -212,7 +216,27 @@ void read_inside_outlines(Image& uv, const Image& pos, const Image* back_positio
       };
       const int si = (outside(i - 1, j) ? 1 : 0) - (outside(i + 1, j) ? 1 : 0);
       const int sj = (outside(i, j - 1) ? 1 : 0) - (outside(i, j + 1) ? 1 : 0);
-      if (si == 0 && sj == 0) continue;
+      if (si == 0 && sj == 0) {
+        // Inside, but a read within half a texel of an outline texel takes in
+        // some of it (and of what the frame blends into it) through the
+        // sampler's footprint: such a read moves to its own texel's centre
+        // along that axis. The texel beside counts as an outline when the one
+        // beyond it, on the same line, lies outside it.
+        auto rim = [&](int ax, int ay, int bx, int by) {
+          if (!inside_frame(ax, ay)) return false;
+          if (outside(ax, ay)) return true;
+          if (!inside_frame(bx, by)) return false;
+          const float* a = pos.px(ax, ay);
+          const float* b = pos.px(bx, by);
+          return !texel_seen(b) || -b[2] > -a[2] + texel_thickness(pos, back_position, thickness, ax, ay);
+        };
+        const float fx = t[0] * static_cast<float>(w) - static_cast<float>(i);
+        const float fy = t[1] * static_cast<float>(h) - static_cast<float>(j);
+        const int ex = fx < 0.5f ? -1 : 1, ey = fy < 0.5f ? -1 : 1;
+        if (rim(i + ex, j, i + 2 * ex, j)) t[0] = (static_cast<float>(i) + 0.5f) / static_cast<float>(w);
+        if (rim(i, j + ey, i, j + 2 * ey)) t[1] = (static_cast<float>(j) + 0.5f) / static_cast<float>(h);
+        continue;
+      }
       const int qi = i + si, qj = j + sj;
       if (!inside_frame(qi, qj) || !texel_seen(pos.px(qi, qj)) || outside(qi, qj)) continue;
       t[0] = (static_cast<float>(qi) + 0.5f) / static_cast<float>(w);
@@ -251,6 +275,67 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
   return out;
 }
 
+uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_albedo, int threads) {
+  const int w = uv.width, h = uv.height;
+  if (hidden.width != w || hidden.height != h || back_albedo.width != w || back_albedo.height != h)
+    throw InvalidArgument("hidden", "expected the trace's size " + std::to_string(w) + "x" + std::to_string(h));
+  const float fw = static_cast<float>(w), fh = static_cast<float>(h);
+  // Decided on the trace as it came, then applied: a pixel's neighbours are
+  // read before any of them changes.
+  enum : unsigned char { Keep, ToHit, ToHidden };
+  Mask action(uv.pixel_count());
+  parallel_rows(0, h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float* t = uv.px(x, y);
+      unsigned char& a = action[static_cast<size_t>(y) * w + x];
+      a = Keep;
+      if (!(t[3] > 0.0f)) continue;  // only hits (an occluder, a hidden side or nothing: no)
+      const float fade = hiz::screen_edge_fade(t[0], t[1]);
+      if (!(t[2] < fade * kSettledShare)) continue;  // sure of itself, to the rounding
+      if (x == 0 || y == 0 || x == w - 1 || y == h - 1) continue;
+      bool inside = true, beside_hidden = false;
+      for (int dy = -1; dy <= 1 && inside; ++dy)
+        for (int dx = -1; dx <= 1 && inside; ++dx) {
+          if (!dx && !dy) continue;
+          const float* q = uv.px(x + dx, y + dy);
+          const float du = (q[0] - t[0]) * fw, dv = (q[1] - t[1]) * fh;
+          inside = q[2] > 0.0f && du * du + dv * dv <= hiz::kReusePixels * hiz::kReusePixels;
+          beside_hidden = beside_hidden || q[3] == hiz::kEnteredHidden;
+        }
+      if (!inside) continue;
+      int i = 0, j = 0;
+      const bool has_back = uv.texel_at(t[0] * fw, t[1] * fh, i, j) && back_albedo.px(i, j)[3] > 0.0f;
+      a = beside_hidden && has_back ? ToHidden : ToHit;
+    }
+  });
+  std::atomic<uint64_t> total{0};
+  parallel_rows(0, h, threads, [&](int y) {
+    uint64_t n = 0;
+    for (int x = 0; x < w; ++x) {
+      const unsigned char a = action[static_cast<size_t>(y) * w + x];
+      if (a == Keep) continue;
+      float* t = uv.px(x, y);
+      const float fade = hiz::screen_edge_fade(t[0], t[1]);
+      if (a == ToHit) {
+        t[2] = t[3] = fade;
+        continue;
+      }
+      int i = 0, j = 0;
+      uv.texel_at(t[0] * fw, t[1] * fh, i, j);
+      const float* alb = back_albedo.px(i, j);
+      const float share = fade - t[2];
+      float* o = hidden.px(x, y);
+      // What a compositor weighs the albedo by is the whole share replaced,
+      // vis + share (the uv's fourth channel): the albedo is scaled to its part.
+      for (int c = 0; c < 3; ++c) o[c] = alb[c] * (share / fade);
+      o[3] = share;
+      ++n;
+    }
+    total.fetch_add(n, std::memory_order_relaxed);
+  });
+  return total.load();
+}
+
 CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
                                  int threads, const Image* back_albedo) {
   require_trace_inputs(in, opt);
@@ -273,7 +358,10 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   out.uv = backend.trace(in, opt);
   // Before the last pass overwrites the trace's fourth channel, which tells
   // an occluder from a hit.
-  if (back_albedo) out.hidden = hidden_sides(out.uv, *back_albedo, out.hidden_pixels, threads);
+  if (back_albedo) {
+    out.hidden = hidden_sides(out.uv, *back_albedo, out.hidden_pixels, threads);
+    if (opt.march == March::Hiz) out.hidden_pixels += settle_uncertain_shares(out.uv, out.hidden, *back_albedo, threads);
+  }
   out.weight = backend.specular_weight(in.position, in.normal, spec, in.projection);
   std::atomic<bool> rough{false};
   // The lod from the trace's own uv, before its misses are continued.
@@ -301,8 +389,9 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
     for (int x = 0; x < spec.width; ++x) {
       float* o = out.uv.px(x, y);
       if (hidden && out.hidden.px(x, y)[3] > 0.0f) {
-        o[2] = 0.0f;
-        o[3] = out.hidden.px(x, y)[3];
+        // A hidden side alone, or beside a hit's own share (settle_uncertain_shares()).
+        if (o[3] == hiz::kEnteredHidden) o[2] = 0.0f;
+        o[3] = o[2] + out.hidden.px(x, y)[3];
       } else {
         o[3] = o[2];
       }

@@ -227,6 +227,81 @@ def test_hidden_sides_take_the_back_surfaces_albedo():
         glint_core.hidden_sides(uv, albedo[:5])
 
 
+def settle_reference(uv, hidden, back_albedo):
+    """docs/marches.md, *Uncertain shares inside a reflection*, pixel by pixel:
+    a hit under its screen-edge fade whose eight neighbours all report
+    something within REUSE_PIXELS of its hit gives the rest of the fade to the
+    hidden side when a neighbour entered one (and its hit's texel has a back
+    surface), else to itself. Decided on the uv as given."""
+    const = glint_core.schema()["constants"]
+    entered, reach, edge_fade = const["ENTERED_HIDDEN"], const["REUSE_PIXELS"], const["EDGE_FADE"]
+    h, w = uv.shape[:2]
+    uv_out, hid_out = uv.copy(), hidden.copy()
+    f32 = np.float32
+    for y in range(1, h - 1):
+        for x in range(1, w - 1):
+            u, v, vis, hit = uv[y, x]
+            if not hit > 0:
+                continue
+            edge = min(min(u, f32(1) - u), min(v, f32(1) - v))
+            fade = f32(min(max(edge / f32(edge_fade), f32(0)), f32(1)))
+            if not vis < fade * f32(0.999):
+                continue
+            near = [uv[y + dy, x + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
+            if not all(q[2] > 0 and ((q[0] - u) * f32(w)) ** 2 + ((q[1] - v) * f32(h)) ** 2 <= f32(reach) ** 2
+                       for q in near):
+                continue
+            i, j = int(np.floor(u * f32(w))), int(np.floor(v * f32(h)))
+            if any(q[3] == entered for q in near) and back_albedo[j, i, 3] > 0:
+                share = fade - vis
+                hid_out[y, x, :3] = back_albedo[j, i, :3] * (share / fade)
+                hid_out[y, x, 3] = share
+            else:
+                uv_out[y, x, 2] = uv_out[y, x, 3] = fade
+    return uv_out, hid_out
+
+
+def test_uncertain_shares_go_to_the_hidden_side_or_the_hit():
+    """A hit the march was unsure of (vis under its fade), inside its reflection:
+    beside a hidden side it shares with it, elsewhere it is sure; on the
+    reflection's outline, or beside another object's hit, it stays."""
+    h, w = 7, 9
+    albedo = np.zeros((h, w, 4), np.float32)
+    albedo[:, :] = (0.6, 0.3, 0.2, 1.0)
+    centre = np.array([(4 + 0.5) / w, (3 + 0.5) / h], np.float32)
+
+    def block(vis=0.6, tag=None):
+        uv = np.zeros((h, w, 4), np.float32)
+        uv[2:5, 3:6, :2] = centre
+        uv[2:5, 3:6, 2:] = 1.0
+        uv[3, 4, 2:] = vis
+        if tag is not None:
+            uv[2, 3, 3] = tag
+        return uv
+
+    zeros = np.zeros((h, w, 4), np.float32)
+    entered = glint_core.schema()["constants"]["ENTERED_HIDDEN"]
+    uv, hid, count = glint_core.settle_uncertain_shares(block(tag=entered), zeros, albedo)
+    assert count == 1 and np.isclose(uv[3, 4, 2], 0.6) and np.allclose(hid[3, 4], (0.24, 0.12, 0.08, 0.4))
+    uv, hid, count = glint_core.settle_uncertain_shares(block(), zeros, albedo)
+    assert count == 0 and uv[3, 4, 2] == uv[3, 4, 3] == 1.0 and not hid.any()
+    for case in ("miss", "far", "edge"):
+        before = block(tag=entered)
+        if case == "miss":
+            before[4, 5] = 0.0
+        elif case == "far":
+            before[4, 5, 0] += 4.0 / w
+        else:  # near the screen's edge: as sure as the fade lets it be
+            before[2:5, 3:6, 1] = np.float32(0.5 / h)
+            before[3, 4, 2:] = np.float32(0.5 / h) / np.float32(0.075)
+        uv, hid, count = glint_core.settle_uncertain_shares(before, zeros, albedo)
+        assert count == 0 and np.array_equal(uv, before) and not hid.any(), case
+    for case in (block(tag=entered), block()):
+        want_uv, want_hid = settle_reference(case, zeros, albedo)
+        uv, hid, _ = glint_core.settle_uncertain_shares(case, zeros, albedo)
+        assert np.array_equal(uv, want_uv) and np.array_equal(hid, want_hid)
+
+
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
 def test_layers_show_hidden_sides_in_place_of_the_occluder(backend, request):
     """With the back layer's albedo, the pixels whose rays came in by an object's
@@ -247,14 +322,21 @@ def test_layers_show_hidden_sides_in_place_of_the_occluder(backend, request):
     layers = glint_core.composite_layers(gb["position"], gb["normal"], gb["specular"], proj, **kw,
                                          back_albedo=albedo)
     uv = glint_core.trace(gb["position"], gb["normal"], proj, specular=gb["specular"], **kw)
-    want = hidden_reference(uv, albedo)
-    hidden = want[..., 3] > 0
-    assert layers["hidden_pixels"] == hidden.sum() > 50
+    settled, want = settle_reference(uv, hidden_reference(uv, albedo), albedo)
+    entered = (uv[..., 3] == glint_core.schema()["constants"]["ENTERED_HIDDEN"]) & (want[..., 3] > 0)
+    shared = (want[..., 3] > 0) & ~entered
+    changed = ~entered & ~shared & (settled[..., 2] != uv[..., 2])
+    assert layers["hidden_pixels"] == entered.sum() + shared.sum() and entered.sum() > 50
     assert np.array_equal(layers["hidden"], want)
-    assert np.array_equal(layers["uv"][hidden, 2], np.zeros(hidden.sum(), np.float32))
-    assert np.array_equal(layers["uv"][hidden, 3], want[hidden, 3])  # what they replace
-    assert np.array_equal(layers["uv"][~hidden], plain["uv"][~hidden])
-    assert np.array_equal(layers["uv"][hidden, :2], plain["uv"][hidden, :2])
+    assert np.array_equal(layers["uv"][entered, 2], np.zeros(entered.sum(), np.float32))
+    assert np.array_equal(layers["uv"][entered, 3], want[entered, 3])  # what they replace
+    # A hit sharing with a hidden side keeps its vis; it replaces both shares.
+    assert np.array_equal(layers["uv"][shared, 2], uv[shared, 2])
+    assert np.array_equal(layers["uv"][shared, 3], uv[shared, 2] + want[shared, 3])
+    assert np.array_equal(layers["uv"][changed, 2], settled[changed, 2])
+    rest = ~entered & ~shared & ~changed
+    assert np.array_equal(layers["uv"][rest], plain["uv"][rest])
+    assert np.array_equal(layers["uv"][entered | shared, :2], plain["uv"][entered | shared, :2])
     assert np.array_equal(layers["weight"], plain["weight"])
     assert "hidden" not in plain
 
@@ -271,16 +353,44 @@ def inside_reference(uv, position, back, thickness):
         j = int(np.floor(np.float32(uv[y, x, 1]) * np.float32(h)))
         if not (0 <= i < w and 0 <= j < h) or not seen[j, i]:
             continue
+        def thick(ai, aj):
+            d = -float(position[aj, ai, 2])
+            if back is not None and back[aj, ai, 3] > 0 and -back[aj, ai, 2] > d:
+                return -float(back[aj, ai, 2]) - d
+            return thickness
+
         d = -float(position[j, i, 2])
-        t = thickness
-        if back is not None and back[j, i, 3] > 0 and -back[j, i, 2] > d:
-            t = -float(back[j, i, 2]) - d
+        t = thick(i, j)
+
+        def inside_frame(qi, qj):
+            return 0 <= qi < w and 0 <= qj < h
 
         def outside(qi, qj):
-            return 0 <= qi < w and 0 <= qj < h and (not seen[qj, qi] or -position[qj, qi, 2] > d + t)
+            return inside_frame(qi, qj) and (not seen[qj, qi] or -position[qj, qi, 2] > d + t)
 
         si = int(outside(i - 1, j)) - int(outside(i + 1, j))
         sj = int(outside(i, j - 1)) - int(outside(i, j + 1))
+        if (si, sj) == (0, 0):
+            # Not on an outline, but within half a texel of one along an axis
+            # (the texel beside outside, or on a line whose next texel is):
+            # to its own texel's centre on that axis.
+            def rim(ai, aj, bi, bj):
+                if not inside_frame(ai, aj):
+                    return False
+                if outside(ai, aj):
+                    return True
+                if not inside_frame(bi, bj):
+                    return False
+                return not seen[bj, bi] or -position[bj, bi, 2] > -float(position[aj, ai, 2]) + thick(ai, aj)
+
+            fx = np.float32(uv[y, x, 0]) * np.float32(w) - np.float32(i)
+            fy = np.float32(uv[y, x, 1]) * np.float32(h) - np.float32(j)
+            ex, ey = (-1 if fx < 0.5 else 1), (-1 if fy < 0.5 else 1)
+            if rim(i + ex, j, i + 2 * ex, j):
+                out[y, x, 0] = (i + 0.5) / w
+            if rim(i, j + ey, i, j + 2 * ey):
+                out[y, x, 1] = (j + 0.5) / h
+            continue
         qi, qj = i + si, j + sj
         if (si, sj) == (0, 0) or not (0 <= qi < w and 0 <= qj < h) or not seen[qj, qi] or outside(qi, qj):
             continue

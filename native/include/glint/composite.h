@@ -22,7 +22,9 @@ struct CompositeLayers {
   Image weight;
   // Given back_albedo: hidden_sides(). Those pixels' uv has vis 0 (a
   // compositor must not also show the front texel there), their u, v kept
-  // (Map UV's derivatives) and their lod a hit's. Empty without back_albedo.
+  // (Map UV's derivatives) and their lod a hit's. With the hiz march, also
+  // the hidden shares of settle_uncertain_shares(), whose uv keeps its vis.
+  // Empty without back_albedo.
   Image hidden;
   // Pixels seen with a positive specular amount: what the trace traced.
   uint64_t reflective_pixels = 0;
@@ -63,8 +65,12 @@ void continue_lod_into_misses(Image& weight, const Image& uv, const Image& specu
 // the texel's depth plus its thickness (back_position's, else `thickness`,
 // TraceOptions::thickness); inside: the step away from every such neighbour, taken when
 // the texel there is seen and no farther than that bound (a texel with such
-// neighbours on opposite sides, a line one texel thin, stays). The trace's
-// own uv, which accuracy is scored on, is not changed.
+// neighbours on opposite sides, a line one texel thin, stays). A uv in a
+// texel off the outline but within half a texel of one, along an axis, moves
+// to its texel's centre on that axis, since the sampler's footprint would
+// take in the outline's blend: the texel beside it on that side lies outside
+// it, or is itself an outline seen along the line (the next texel lies outside
+// that one). The trace's own uv, which accuracy is scored on, is not changed.
 void read_inside_outlines(Image& uv, const Image& position, const Image* back_position, float thickness,
                           int threads = 0);
 
@@ -77,6 +83,21 @@ void read_inside_outlines(Image& uv, const Image& position, const Image* back_po
 // occluder); `count` gets the number of such pixels. How a compositor lights
 // the colour is its choice (docs/addon.md, *Hidden sides*).
 Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& count, int threads = 0);
+
+// What the hiz march was unsure of, settled from the pixel's neighbours
+// (docs/marches.md, *Uncertain shares inside a reflection*). A hit with
+// visibility under its screen-edge fade (an outline texel's confidence: the
+// ray may have passed beside the object there) whose eight neighbours all
+// report something within hiz::kReusePixels of its hit lies inside its
+// reflection, so its ray cannot have passed into the open: where a neighbour
+// came in by the object's hidden side (and the hit's texel has a back
+// surface), the rest of the fade goes to that side, in `hidden` as
+// (albedo x share / fade, share): a compositor weighs the hidden colour by the
+// pixel's whole replaced share (vis + share = fade), so the albedo is scaled
+// to its part; elsewhere the hit takes the whole fade. `uv` is the trace's own (its fourth channel tells hits, occluders and
+// hidden sides apart); returns the number of pixels given a hidden share.
+// composite_layers() runs it for the hiz march when given back_albedo.
+uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_albedo, int threads = 0);
 
 // Trace on `backend` (specular given: only reflective pixels are traced),
 // then the weight on the same backend and the lod. No trace, weight or lod
