@@ -253,6 +253,41 @@ void bind_trace(pyb::module_& m) {
       "fade). count: the pixels given a hidden share. docs/marches.md, *Uncertain shares inside a\n"
       "reflection*.");
   m.def(
+      "positive_bin_means",
+      [](pyb::array_t<float> values, pyb::array_t<int, pyb::array::c_style | pyb::array::forcecast> row_bins,
+         pyb::array_t<int, pyb::array::c_style | pyb::array::forcecast> col_bins, std::pair<int, int> shape,
+         int threads) {
+        if (values.ndim() != 2)
+          throw InvalidArgument("values", "expected a 2-D float32 array, got " + std::to_string(values.ndim()) +
+                                              " dimensions");
+        const auto rows = values.shape(0), cols = values.shape(1);
+        if (row_bins.ndim() != 1 || row_bins.shape(0) != rows)
+          throw InvalidArgument("row_bins", "expected one bin per row (" + std::to_string(rows) + ")");
+        if (col_bins.ndim() != 1 || col_bins.shape(0) != cols)
+          throw InvalidArgument("col_bins", "expected one bin per column (" + std::to_string(cols) + ")");
+        const auto [bin_rows, bin_cols] = shape;
+        if (bin_rows < 1 || bin_cols < 1 || bin_rows > kMaxImageSide || bin_cols > kMaxImageSide)
+          throw InvalidArgument("shape", "expected 1 to " + std::to_string(kMaxImageSide) + " bins each way");
+        pyb::array_t<float> out({bin_rows, bin_cols});
+        const float* v = values.data();
+        const std::ptrdiff_t rs = values.strides(0) / static_cast<std::ptrdiff_t>(sizeof(float));
+        const std::ptrdiff_t cs = values.strides(1) / static_cast<std::ptrdiff_t>(sizeof(float));
+        if (values.strides(0) % sizeof(float) || values.strides(1) % sizeof(float))
+          throw InvalidArgument("values", "expected strides in whole floats");
+        float* o = out.mutable_data();
+        {
+          pyb::gil_scoped_release release;
+          positive_bin_means(v, rs, cs, static_cast<int>(rows), static_cast<int>(cols), row_bins.data(),
+                             col_bins.data(), bin_rows, bin_cols, o, threads);
+        }
+        return out;
+      },
+      "values"_a, "row_bins"_a, "col_bins"_a, "shape"_a, "threads"_a = 0,
+      "float32 [shape]: per bin of `values` (2-D float32, any strides: a channel of an image),\n"
+      "the mean of its positive values, 0 where it has none; row_bins / col_bins give each\n"
+      "row's and column's bin, never decreasing. Sums in numpy add.reduceat's order, so the\n"
+      "add-on's coarse blur levels get the bits its numpy rule gives (logic/compositing.py).");
+  m.def(
       "continue_missing_uv",
       [](const pyb::handle& uv, int rings) {
         if (rings < 0) throw InvalidArgument("rings", "expected 0 or more, got " + std::to_string(rings));

@@ -336,6 +336,65 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
   return total.load();
 }
 
+void positive_bin_means(const float* values, std::ptrdiff_t row_stride, std::ptrdiff_t col_stride, int rows,
+                        int cols, const int* row_bin, const int* col_bin, int bin_rows, int bin_cols, float* out,
+                        int threads) {
+  if (rows < 0 || cols < 0 || bin_rows < 1 || bin_cols < 1)
+    throw InvalidArgument("bins", "expected a grid and at least one bin each way");
+  auto check = [](const int* bin, int n, int bins, const char* name) {
+    for (int k = 0; k < n; ++k)
+      if (bin[k] < 0 || bin[k] >= bins || (k > 0 && bin[k] < bin[k - 1]))
+        throw InvalidArgument(name, "expected bin indices in [0, " + std::to_string(bins) +
+                                        ") that never decrease, got " + std::to_string(bin[k]) + " at " +
+                                        std::to_string(k));
+  };
+  check(row_bin, rows, bin_rows, "row_bins");
+  check(col_bin, cols, bin_cols, "col_bins");
+  std::fill(out, out + static_cast<size_t>(bin_rows) * bin_cols, 0.0f);
+  // The runs of rows, each a bin of the output's row.
+  std::vector<int> run_start;
+  for (int r = 0; r < rows; ++r)
+    if (r == 0 || row_bin[r] != row_bin[r - 1]) run_start.push_back(r);
+  run_start.push_back(rows);
+  const int runs = static_cast<int>(run_start.size()) - 1;
+  parallel_rows(0, runs, threads, [&](int k) {
+    const int r0 = run_start[k], r1 = run_start[k + 1];
+    std::vector<float> sum(static_cast<size_t>(cols));
+    std::vector<int> count(static_cast<size_t>(cols));
+    // numpy's reduceat, along either axis, is first + (0 + second + third
+    // ...): its pairwise sum, sequential below 8 terms.
+    for (int c = 0; c < cols; ++c) {
+      float first = 0.0f, rest = 0.0f;
+      int n = 0;
+      for (int r = r0; r < r1; ++r) {
+        const float v = values[r * row_stride + c * col_stride];
+        const float kept = v < 0.0f ? 0.0f : v;  // numpy's maximum(v, 0): a NaN stays
+        if (r == r0)
+          first = kept;
+        else
+          rest += kept;
+        n += v > 0.0f;
+      }
+      sum[c] = r1 > r0 + 1 ? first + rest : first;
+      count[c] = n;
+    }
+    float* row = out + static_cast<size_t>(row_bin[r0]) * bin_cols;
+    for (int c0 = 0; c0 < cols;) {
+      int c1 = c0 + 1;
+      while (c1 < cols && col_bin[c1] == col_bin[c0]) ++c1;
+      float rest = 0.0f;
+      int n = count[c0];
+      for (int c = c0 + 1; c < c1; ++c) {
+        rest += sum[c];
+        n += count[c];
+      }
+      const float s = c1 > c0 + 1 ? sum[c0] + rest : sum[c0];
+      row[col_bin[c0]] = n > 0 ? static_cast<float>(static_cast<double>(s) / n) : 0.0f;
+      c0 = c1;
+    }
+  });
+}
+
 CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
                                  int threads, const Image* back_albedo) {
   require_trace_inputs(in, opt);

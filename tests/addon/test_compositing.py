@@ -587,6 +587,32 @@ def test_the_scale_offset_places_4_3_s_read_on_the_texels_frame_scale_reads(wh):
     assert np.allclose((y + 0.5 - oy * w) * ch / h - 0.5, y * ch / h, rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("hw", [(1, 1), (7, 9), (50, 66), (270, 480), (1080, 1920)])
+def test_the_cores_bin_means_are_the_rules_bit_for_bit(core, hw):
+    """The coarse texels' mean lod: glint_core.positive_bin_means (the add-on's
+    frames) against positive_bin_means, the rule in numpy, on lods with zeros,
+    negatives and a NaN, on whole frames and on a region cut from a 4-channel
+    image (a strided view, as the add-on hands it)."""
+    h, w = hw
+    rng = np.random.default_rng(11)
+    weight = rng.uniform(-1, 9, (h, w, 4)).astype(np.float32)
+    weight[rng.uniform(size=(h, w)) < 0.3, 3] = 0.0
+    weight[h // 2, w // 2, 3] = np.nan
+    cw, ch = cg.coarse_size(w, h)
+    regions = [(0, 0, w, h)] + ([(3, 2, w - 5, h - 1)] if w > 8 and h > 3 else [])
+    for x0, y0, x1, y1 in regions:
+        lod = weight[y0:y1, x0:x1, 3]
+        tx, ty = cg._nearest_texels(x0, x1, w, cw), cg._nearest_texels(y0, y1, h, ch)
+        want = cg.positive_bin_means(lod, ty, tx, (ch, cw))
+        got = core.positive_bin_means(lod, ty, tx, (ch, cw))
+        assert got.dtype == np.float32 and np.array_equal(got, want, equal_nan=True), (hw, x0, y0)
+    if h > 1:  # bins that decrease
+        with pytest.raises(ValueError, match="row_bins"):
+            core.positive_bin_means(weight[..., 3], np.arange(h)[::-1].copy(), np.zeros(w), (h, 1))
+    with pytest.raises(ValueError, match="col_bins"):
+        core.positive_bin_means(weight[..., 3], np.zeros(h), np.full(w, 2), (1, 2))
+
+
 @pytest.mark.parametrize("hw", [(12, 16), (50, 66), (1, 1)])
 def test_the_coarse_canvas_comes_back_as_blenders_scale_reads_it(hw):
     """frame_scale's model against the read written out (3.4's Scale to the

@@ -2,6 +2,7 @@
 // add-on's node group) needs from one frame's G-buffer, made in one call so
 // that the G-buffer crosses into the core once per frame (docs/addon.md).
 #pragma once
+#include <cstddef>
 #include <cstdint>
 
 #include "glint/image.h"
@@ -98,6 +99,22 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
 // hidden sides apart); returns the number of pixels given a hidden share.
 // composite_layers() runs it for the hiz march when given back_albedo.
 uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_albedo, int threads = 0);
+
+// A grid of values cut into bins by runs of rows and of columns (row_bin[r],
+// col_bin[c]: each bin's index, never decreasing, below bin_rows and
+// bin_cols), and per bin the mean of its positive values, 0 where it has none,
+// into out[bin_rows * bin_cols]. Value (r, c) is values[r * row_stride + c *
+// col_stride] (floats; a channel of an image). The sums run as numpy's
+// add.reduceat runs them, down each column of a bin's rows and then across
+// its columns, each as the first plus the sum of the rest (numpy's order for
+// bins up to 8 rows and columns wide), in float, and the mean is the float of
+// the double quotient:
+// the add-on's coarse blur levels (addon/glint/logic/compositing.py,
+// coarse_images) read the same bits whichever computes them. Throws
+// InvalidArgument on bins out of order or range.
+void positive_bin_means(const float* values, std::ptrdiff_t row_stride, std::ptrdiff_t col_stride, int rows,
+                        int cols, const int* row_bin, const int* col_bin, int bin_rows, int bin_cols, float* out,
+                        int threads = 0);
 
 // Trace on `backend` (specular given: only reflective pixels are traced),
 // then the weight on the same backend and the lod. No trace, weight or lod
