@@ -470,7 +470,7 @@ def run_scene(name, opts, state, tmp):
         np.savez_compressed(os.path.join(opts["arrays"], f"{name}.npz"), reflecting=reflecting, on=on,
                             cycles_frame=cycles_frame, **{f"{m}_frame": frames[m] for m in modes},
                             **{f"{m}_diff": diffs[m] for m in METHODS},
-                            **{f"glint_{k}": np.asarray(state.arrays[k]) for k in ("uv", "weight", "position",
+                            **{f"glint_{k}": np.asarray(state.arrays[k]) for k in ("uv", "weight", "hidden", "position",
                                                                                   "normal", "specular", "projection")
                                if k in state.arrays})
     info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
