@@ -419,7 +419,8 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   // an occluder from a hit.
   if (back_albedo) {
     out.hidden = hidden_sides(out.uv, *back_albedo, out.hidden_pixels, threads);
-    if (opt.march == March::Hiz) out.hidden_pixels += settle_uncertain_shares(out.uv, out.hidden, *back_albedo, threads);
+    if (opt.march == March::Hiz)
+      out.hidden_pixels += settle_uncertain_shares(out.uv, out.hidden, *back_albedo, threads);
   }
   out.weight = backend.specular_weight(in.position, in.normal, spec, in.projection);
   std::atomic<bool> rough{false};

@@ -95,9 +95,10 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
 // surface), the rest of the fade goes to that side, in `hidden` as
 // (albedo x share / fade, share): a compositor weighs the hidden colour by the
 // pixel's whole replaced share (vis + share = fade), so the albedo is scaled
-// to its part; elsewhere the hit takes the whole fade. `uv` is the trace's own (its fourth channel tells hits, occluders and
-// hidden sides apart); returns the number of pixels given a hidden share.
-// composite_layers() runs it for the hiz march when given back_albedo.
+// to its part; elsewhere the hit takes the whole fade. `uv` is the trace's
+// own (its fourth channel tells hits, occluders and hidden sides apart);
+// returns the number of pixels given a hidden share. composite_layers() runs
+// it for the hiz march when given back_albedo.
 uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_albedo, int threads = 0);
 
 // A grid of values cut into bins by runs of rows and of columns (row_bin[r],
