@@ -345,8 +345,8 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
             keys.update((name, ("none", region, placeable)) for name in hidden_imgs)
     # where the host's Scale brings the coarse canvas back, the fine image is
     # not read (compositing.switch_states)
-    # The core's bin means where it has them (a core from before: the rule in numpy).
-    bin_means = getattr(frame.core, "positive_bin_means", compositing.positive_bin_means)
+    # The core's bin means where it has them (a core from before: None, the rule in numpy).
+    bin_means = getattr(frame.core, "positive_bin_means", None)
     images = compositing.region_images(uv, weight, region, offset,
                                        fine=not host_nodes.coarse_read_back_by_scale(), bin_means=bin_means)
     images.update(hidden_imgs)

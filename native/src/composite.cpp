@@ -23,6 +23,21 @@ namespace {
 // Pooled (glint/image.h): a frame's masks come back already mapped.
 using Mask = std::vector<unsigned char, PixelAllocator<unsigned char>>;
 
+// A float sum in numpy's add.reduceat order, along either axis: the first
+// term plus (0 + second + third ...), its pairwise sum, which is sequential
+// below 8 terms.
+struct ReduceatSum {
+  float first = 0.0f, rest = 0.0f;
+  int terms = 0;
+  void add(float v) {
+    if (terms++ == 0)
+      first = v;
+    else
+      rest += v;
+  }
+  float value() const { return terms > 1 ? first + rest : first; }
+};
+
 // A hit's visibility under this share of its screen-edge fade is one its
 // march was unsure of (an outline texel's confidence), not rounding.
 constexpr float kSettledShare = 0.999f;
@@ -208,12 +223,18 @@ void read_inside_outlines(Image& uv, const Image& pos, const Image* back_positio
           !texel_seen(pos.px(i, j)))
         continue;
       // thickness >= 0: a NaN or negative option is refused before.
-      const float bound = -pos.px(i, j)[2] + texel_thickness(pos, back_position, thickness, i, j);
-      auto outside = [&](int qx, int qy) {  // the frame's edge is no outline
+      auto bound_of = [&](int ax, int ay) {
+        return -pos.px(ax, ay)[2] + texel_thickness(pos, back_position, thickness, ax, ay);
+      };
+      // Texel q lies outside the object whose depth plus thickness is `bound`:
+      // unseen, or farther. The frame's edge is no outline.
+      auto beyond = [&](float bound, int qx, int qy) {
         if (!inside_frame(qx, qy)) return false;
         const float* o = pos.px(qx, qy);
         return !texel_seen(o) || -o[2] > bound;
       };
+      const float bound = bound_of(i, j);
+      auto outside = [&](int qx, int qy) { return beyond(bound, qx, qy); };
       const int si = (outside(i - 1, j) ? 1 : 0) - (outside(i + 1, j) ? 1 : 0);
       const int sj = (outside(i, j - 1) ? 1 : 0) - (outside(i, j + 1) ? 1 : 0);
       if (si == 0 && sj == 0) {
@@ -224,11 +245,7 @@ void read_inside_outlines(Image& uv, const Image& pos, const Image* back_positio
         // beyond it, on the same line, lies outside it.
         auto rim = [&](int ax, int ay, int bx, int by) {
           if (!inside_frame(ax, ay)) return false;
-          if (outside(ax, ay)) return true;
-          if (!inside_frame(bx, by)) return false;
-          const float* a = pos.px(ax, ay);
-          const float* b = pos.px(bx, by);
-          return !texel_seen(b) || -b[2] > -a[2] + texel_thickness(pos, back_position, thickness, ax, ay);
+          return outside(ax, ay) || beyond(bound_of(ax, ay), bx, by);
         };
         const float fx = t[0] * static_cast<float>(w) - static_cast<float>(i);
         const float fy = t[1] * static_cast<float>(h) - static_cast<float>(j);
@@ -361,35 +378,27 @@ void positive_bin_means(const float* values, std::ptrdiff_t row_stride, std::ptr
     const int r0 = run_start[k], r1 = run_start[k + 1];
     std::vector<float> sum(static_cast<size_t>(cols));
     std::vector<int> count(static_cast<size_t>(cols));
-    // numpy's reduceat, along either axis, is first + (0 + second + third
-    // ...): its pairwise sum, sequential below 8 terms.
     for (int c = 0; c < cols; ++c) {
-      float first = 0.0f, rest = 0.0f;
+      ReduceatSum s;
       int n = 0;
       for (int r = r0; r < r1; ++r) {
         const float v = values[r * row_stride + c * col_stride];
-        const float kept = v < 0.0f ? 0.0f : v;  // numpy's maximum(v, 0): a NaN stays
-        if (r == r0)
-          first = kept;
-        else
-          rest += kept;
+        s.add(v < 0.0f ? 0.0f : v);  // numpy's maximum(v, 0): a NaN stays
         n += v > 0.0f;
       }
-      sum[c] = r1 > r0 + 1 ? first + rest : first;
+      sum[c] = s.value();
       count[c] = n;
     }
     float* row = out + static_cast<size_t>(row_bin[r0]) * bin_cols;
     for (int c0 = 0; c0 < cols;) {
-      int c1 = c0 + 1;
-      while (c1 < cols && col_bin[c1] == col_bin[c0]) ++c1;
-      float rest = 0.0f;
-      int n = count[c0];
-      for (int c = c0 + 1; c < c1; ++c) {
-        rest += sum[c];
-        n += count[c];
+      int c1 = c0;
+      ReduceatSum s;
+      int n = 0;
+      for (; c1 < cols && col_bin[c1] == col_bin[c0]; ++c1) {
+        s.add(sum[c1]);
+        n += count[c1];
       }
-      const float s = c1 > c0 + 1 ? sum[c0] + rest : sum[c0];
-      row[col_bin[c0]] = n > 0 ? static_cast<float>(static_cast<double>(s) / n) : 0.0f;
+      row[col_bin[c0]] = n > 0 ? static_cast<float>(static_cast<double>(s.value()) / n) : 0.0f;
       c0 = c1;
     }
   });

@@ -803,7 +803,7 @@ def region_images(uv: np.ndarray, weight: np.ndarray, region: Tuple[int, int, in
     dx, dy = region_offset(region, w, h)
     images = {IMAGE_UV: uv[y0:y1, x0:x1], IMAGE_WEIGHT: weight[y0:y1, x0:x1],
               IMAGE_OFFSET: np.array([[[dx, dy, hidden_offset[0], hidden_offset[1]]]], np.float32)}
-    images.update(coarse_images(weight[y0:y1, x0:x1, 3], region, w, h, fine, bin_means or positive_bin_means))
+    images.update(coarse_images(weight[y0:y1, x0:x1, 3], region, w, h, fine, bin_means))
     return images
 
 
@@ -887,7 +887,7 @@ def positive_bin_means(values: np.ndarray, row_bins: np.ndarray, col_bins: np.nd
 
 
 def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int, height: int,
-                  fine: bool = True, bin_means=positive_bin_means) -> Dict[str, np.ndarray]:
+                  fine: bool = True, bin_means=None) -> Dict[str, np.ndarray]:
     """The coarse canvas's images for a region of a ``width`` x ``height``
     frame whose pixels have ``lod``. The canvas covers the frame
     (:func:`coarse_size`), texel (i, j) at the frame's pixel (i W / cw, j H / ch):
@@ -903,7 +903,8 @@ def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int
       not read where ``frame_scale`` does (4.4-4.5, untested). Without: the compositor
       reads the canvas back through ``frame_scale``.
 
-    ``bin_means``: :func:`positive_bin_means` or the core's, which is the same."""
+    ``bin_means``: the core's ``positive_bin_means``, which gives the same bits;
+    None: :func:`positive_bin_means`."""
     x0, y0, x1, y1 = region
     bw, bh = x1 - x0, y1 - y0
     cw, ch = coarse_size(width, height)
@@ -911,7 +912,7 @@ def coarse_images(lod: np.ndarray, region: Tuple[int, int, int, int], width: int
     coarse[..., 0] = ((np.arange(cw) * (width / cw) + 0.5 - x0) / bw)[None, :]
     coarse[..., 1] = ((np.arange(ch) * (height / ch) + 0.5 - y0) / bh)[:, None]
     tx, ty = _nearest_texels(x0, x1, width, cw), _nearest_texels(y0, y1, height, ch)
-    coarse[..., 3] = bin_means(np.asarray(lod, np.float32), ty, tx, (ch, cw))
+    coarse[..., 3] = (bin_means or positive_bin_means)(np.asarray(lod, np.float32), ty, tx, (ch, cw))
     images = {IMAGE_COARSE: coarse}
     if fine:
         images[IMAGE_FINE] = _fine_image(tuple(int(v) for v in region), int(width), int(height))
