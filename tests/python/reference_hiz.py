@@ -302,6 +302,38 @@ def _in_front_before(pos, planes, i, j, ta, a0, a1, b0, b1, f0, d, w, h):
     return u @ (a0 + ta * (a1 - a0)) - (u @ o[:3]) * b >= -tol * b
 
 
+def _behind_convex_neighbours(pos, planes, i, j, u, tol, t0, tb, G_of, f0, d, w, h, thick):
+    """At a convex crease (the texel's and a neighbour's centres each behind the
+    other's plane, by less than the texel's thickness) the surface is the farther
+    of the two planes. Looks at the neighbours across the two edges nearest the
+    ray's point at t0: None when the ray stays in front of one of their planes to
+    tb, else the first t >= t0 at which it is behind all of them."""
+    p = pos[j, i, :3]
+    q = f0 + t0 * d
+    t = t0
+    for qi, qj in ((i - 1 if q[0] < i + 0.5 else i + 1, j), (i, j - 1 if q[1] < j + 0.5 else j + 1)):
+        if not (0 <= qi < w and 0 <= qj < h):
+            continue
+        o, n = pos[qj, qi], planes[qj, qi]
+        if not _seen(o) or not _usable(n):
+            continue
+        g = u @ (o[:3] - p)
+        if not g < -tol or g < -thick:  # not behind this texel's plane, or an outline
+            continue
+        qu = n / np.linalg.norm(n)
+        qtol = PLANE_TOLERANCE * np.linalg.norm(o[:3])
+        if not qu @ (p - o[:3]) < -qtol:  # concave or flat: this texel's plane is the nearer
+            continue
+        G, B = G_of(qu, qu @ o[:3])
+        qa, qb = G(t), G(tb)
+        if qa < -qtol * B(t):
+            continue
+        if not qb < -qtol * B(tb):
+            return None
+        t = t + (tb - t) * min(max(qa / (qa - qb), 0.0), 1.0)
+    return t
+
+
 def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, plane_depth,
            texel_thickness, depth, thickness_known):
     n = planes[j, i]
@@ -312,23 +344,32 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     np_ = u @ p
     tol = PLANE_TOLERANCE * np.linalg.norm(p)
 
-    def G(t):
-        return u @ (a0 + t * (a1 - a0)) - np_ * (b0 + t * (b1 - b0))
+    def G_of(uu, k):
+        def G(t):
+            return uu @ (a0 + t * (a1 - a0)) - k * (b0 + t * (b1 - b0))
+        return G, B
 
     def B(t):
         return b0 + t * (b1 - b0)
 
+    G = G_of(u, np_)[0]
     ga, gb = G(ta), G(tb)
     a_behind, b_behind = ga < -tol * B(ta), gb < -tol * B(tb)
     if not a_behind and not b_behind:
         return "pass", ta
+    thick = texel_thickness(i, j)
     if not a_behind:
         f = min(max(ga / (ga - gb), 0.0), 1.0)
-        return "hit on plane", ta + (tb - ta) * f
+        t = _behind_convex_neighbours(pos, planes, i, j, u, tol, ta + (tb - ta) * f, tb, G_of, f0, d, w, h, thick)
+        return ("pass", ta) if t is None else ("hit on plane", t)
+    t = _behind_convex_neighbours(pos, planes, i, j, u, tol, ta, tb, G_of, f0, d, w, h, thick)
+    if t is None:
+        return "pass", ta
+    if t > ta:  # in front of a convex neighbour's plane when it entered: a crossing later, if any
+        return ("hit on plane", t) if G(t) < -tol * B(t) else ("pass", ta)
     L = plane_row(i, j)
     if L is None:
         return "hit", ta
-    thick = texel_thickness(i, j)
 
     def behind_by(t):
         q = f0 + t * d

@@ -173,6 +173,43 @@ bool in_front_before(ivec2 c, float ta) {
   return ray_plane(ta, u, np) >= -tol * ray_b(ta);
 }
 
+// behind_convex_neighbours() in march_hiz.cpp: false when the ray stays in
+// front of a convex neighbour's plane to tb; else t, where it is behind all.
+bool behind_convex_neighbours(ivec2 c, vec3 u, float tol, vec3 p, float t0, float tb, out float t) {
+  t = t0;
+  precise float hx = g_f0.x + t0 * g_d.x;
+  precise float hy = g_f0.y + t0 * g_d.y;
+  ivec2 nb[2] = ivec2[2](ivec2(hx < float(c.x) + 0.5 ? c.x - 1 : c.x + 1, c.y),
+                         ivec2(c.x, hy < float(c.y) + 0.5 ? c.y - 1 : c.y + 1));
+  float lim = -texel_thickness(c, -p.z);
+  for (int k = 0; k < 2; ++k) {
+    ivec2 q = nb[k];
+    if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) continue;
+    vec4 o = imageLoad(u_position_img, q);
+    vec3 nq = imageLoad(u_planes, q).xyz;
+    if (!texel_seen(o) || !normal_usable(nq)) continue;
+    precise float g = u.x * (o.x - p.x) + u.y * (o.y - p.y) + u.z * (o.z - p.z);
+    if (!(g < -tol) || g < lim) continue;
+    vec3 qu;
+    float qnp, qtol;
+    unit_plane(nq, o.xyz, qu, qnp, qtol);
+    precise float gq = qu.x * (p.x - o.x) + qu.y * (p.y - o.y) + qu.z * (p.z - o.z);
+    if (!(gq < -qtol)) continue;
+    float qa = ray_plane(t, qu, qnp);
+    precise float la = -qtol * ray_b(t);
+    if (qa < la) continue;
+    float qb = ray_plane(tb, qu, qnp);
+    precise float lb = -qtol * ray_b(tb);
+    if (!(qb < lb)) return false;
+    precise float f = qa / (qa - qb);
+    f = f < 0.0 ? 0.0 : f;
+    f = 1.0 < f ? 1.0 : f;
+    precise float tn = t + (tb - t) * f;
+    t = tn;
+  }
+  return true;
+}
+
 // n, p: the texel's plane normal (u_planes) and position, for the outline test after a hit.
 int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, out vec3 n, out vec3 p) {
   n = imageLoad(u_planes, c).xyz;
@@ -197,7 +234,22 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
     precise float th = ta + (tb - ta) * f;
     t_hit = th;
     located = true;
+    float tc;
+    if (!behind_convex_neighbours(c, u, tol, p, th, tb, tc)) return PASS;
+    t_hit = tc;
     return HIT;
+  }
+  {
+    float tc;
+    if (!behind_convex_neighbours(c, u, tol, p, ta, tb, tc)) return PASS;
+    if (tc > ta) {
+      float gc = ray_plane(tc, u, np);
+      precise float lc = -tol * ray_b(tc);
+      if (!(gc < lc)) return PASS;
+      t_hit = tc;
+      located = true;
+      return HIT;
+    }
   }
   vec4 L;
   if (!texel_plane(n, p, L)) return HIT;

@@ -237,6 +237,42 @@ bool in_front_before(const Image& position, const HizPlanes& planes, const Ray& 
   return r.plane(ta, pl.u, pl.np) >= -pl.tol * r.b(ta);
 }
 
+// Where a texel and its neighbour meet at a convex crease (each centre lies
+// behind the other's plane, by less than the texel's thickness: one surface
+// folding away, not an outline), the surface between their centres is the
+// farther of the two planes, not the texel's plane alone: a ray behind the
+// texel's plane but in front of the neighbour's is in front of the surface.
+// The neighbours looked at are the two across the edges nearest the ray's
+// point at t0. Returns false when the ray stays in front of one of them to
+// tb; else t, the first fraction from t0 at which it is behind all of them
+// (t0 when it already is there).
+bool behind_convex_neighbours(const Image& position, const HizPlanes& planes, const Image* back, float thickness,
+                              const Ray& r, int i, int j, const UnitPlane& pl, const float* p, float t0, float tb,
+                              float& t) {
+  t = t0;
+  const float hx = r.f0[0] + t0 * r.d[0], hy = r.f0[1] + t0 * r.d[1];
+  const int nb[2][2] = {{hx < static_cast<float>(i) + 0.5f ? i - 1 : i + 1, j},
+                        {i, hy < static_cast<float>(j) + 0.5f ? j - 1 : j + 1}};
+  const float lim = -texel_thickness(position, back, thickness, i, j);
+  for (const int* q : nb) {
+    if (q[0] < 0 || q[1] < 0 || q[0] >= position.width || q[1] >= position.height) continue;
+    const float* o = position.px(q[0], q[1]);
+    const float* nq = planes.px(q[0], q[1]);
+    if (!texel_seen(o) || !normal_usable(nq)) continue;
+    const float g = pl.u[0] * (o[0] - p[0]) + pl.u[1] * (o[1] - p[1]) + pl.u[2] * (o[2] - p[2]);
+    if (!(g < -pl.tol) || g < lim) continue;  // not behind this plane, or an outline
+    const UnitPlane ql = unit_plane(nq, o);
+    const float gq = ql.u[0] * (p[0] - o[0]) + ql.u[1] * (p[1] - o[1]) + ql.u[2] * (p[2] - o[2]);
+    if (!(gq < -ql.tol)) continue;  // a concave or flat crease: this plane is the nearer
+    const float qa = r.plane(t, ql.u, ql.np);
+    if (qa < -ql.tol * r.b(t)) continue;  // already behind the neighbour's plane
+    const float qb = r.plane(tb, ql.u, ql.np);
+    if (!(qb < -ql.tol * r.b(tb))) return false;  // in front of it to the texel's exit
+    t = t + (tb - t) * std::min(std::max(qa / (qa - qb), 0.0f), 1.0f);
+  }
+  return true;
+}
+
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
 // or it is behind the plane at the texel, where the texel's thickness says
 // whether that is solid. Being behind by no more than a rounding slack is a
@@ -259,7 +295,24 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
     const float f = ga / (ga - gb);  // G is linear in t: its zero, in [0, 1]
     t_hit = ta + (tb - ta) * std::min(std::max(f, 0.0f), 1.0f);
     located = true;
+    float t;
+    if (!behind_convex_neighbours(position, planes, back, s.opt.thickness, r, i, j, pl, p, t_hit, tb, t))
+      return TexelOutcome::Pass;
+    t_hit = t;
     return TexelOutcome::Hit;
+  }
+  // Behind the plane from the start, but maybe in front of a convex
+  // neighbour's: then it meets the surface only where it is behind both.
+  {
+    float t;
+    if (!behind_convex_neighbours(position, planes, back, s.opt.thickness, r, i, j, pl, p, ta, tb, t))
+      return TexelOutcome::Pass;
+    if (t > ta) {
+      if (!(r.plane(t, pl.u, pl.np) < -pl.tol * r.b(t))) return TexelOutcome::Pass;  // back in front by then
+      t_hit = t;
+      located = true;
+      return TexelOutcome::Hit;
+    }
   }
   // Behind from the start: how far, in view distance, at either end.
   float L[4];
