@@ -46,6 +46,8 @@ import numpy as np
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.environ.get("GLINT_BUILD_DIR", os.path.join(root, "build")), "python"))
 import glint_core  # noqa: E402
+sys.path.insert(0, os.path.join(root, "tests", "python"))
+from reference_hiz import edge_fade  # noqa: E402,F401  (hiz's fade at the screen's edges, written once)
 from scene_meshes import box, perspective  # noqa: E402  (bench/, beside this script)
 
 CONSTANTS = glint_core.schema()["constants"]
@@ -154,12 +156,6 @@ def sample(colour: np.ndarray, uv: np.ndarray) -> np.ndarray:
     c = ((colour[y0, x0] * (1 - fx) + colour[y0, x1] * fx) * (1 - fy)
          + (colour[y1, x0] * (1 - fx) + colour[y1, x1] * fx) * fy)
     return c * uv[..., 2:3]
-
-
-def edge_fade(uv: np.ndarray) -> np.ndarray:
-    """hiz's visibility fade at the screen's edges (schema EDGE_FADE)."""
-    edge = np.minimum(np.minimum(uv[..., 0], 1 - uv[..., 0]), np.minimum(uv[..., 1], 1 - uv[..., 1]))
-    return np.clip(edge / CONSTANTS["EDGE_FADE"], 0.0, 1.0)
 
 
 def outline_texels(position: np.ndarray) -> np.ndarray:

@@ -307,7 +307,7 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
       unsigned char& a = action[static_cast<size_t>(y) * w + x];
       a = Keep;
       if (!(t[3] > 0.0f)) continue;  // only hits (an occluder, a hidden side or nothing: no)
-      const float fade = hiz::screen_edge_fade(t[0], t[1]);
+      const float fade = hiz::pixel_edge_fade(x, y, w, h, t[0], t[1]);
       if (!(t[2] < fade * kSettledShare)) continue;  // sure of itself, to the rounding
       if (x == 0 || y == 0 || x == w - 1 || y == h - 1) continue;
       bool inside = true, beside_hidden = false;
@@ -332,7 +332,7 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
       const unsigned char a = action[static_cast<size_t>(y) * w + x];
       if (a == Keep) continue;
       float* t = uv.px(x, y);
-      const float fade = hiz::screen_edge_fade(t[0], t[1]);
+      const float fade = hiz::pixel_edge_fade(x, y, w, h, t[0], t[1]);
       if (a == ToHit) {
         t[2] = t[3] = fade;
         continue;

@@ -39,9 +39,23 @@ HIDDEN_SHARE = _S.HIDDEN_SHARE  # deeper than this share of the thickness: came 
 
 def edge_fade(uv: np.ndarray) -> np.ndarray:
     """hiz's visibility fade at the screen's edges, per pixel of a reflected-uv
-    buffer [H, W, 4]: 1 inside, falling linearly to 0 within EDGE_FADE of an edge."""
-    u, v = uv[..., 0], uv[..., 1]
-    return np.clip(np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) / EDGE_FADE, 0, 1)
+    buffer [H, W, 4]: 1 inside, falling linearly to 0 within EDGE_FADE of the edge
+    that the pixel's ray is heading for: the first one that the line from the
+    pixel's centre through its hit meets beyond the hit (the nearest edge for a hit
+    on the pixel's own centre)."""
+    h, w = uv.shape[:2]
+    y, x = np.mgrid[0:h, 0:w]
+    return _fade((x + 0.5) / w, (y + 0.5) / h, uv[..., 0].astype(float), uv[..., 1].astype(float))
+
+
+def _fade(ou, ov, u, v):
+    du, dv = u - ou, v - ov
+    mu = np.where(du > 0, 1 - u, u)
+    mv = np.where(dv > 0, 1 - v, v)
+    heading = np.where(mu * np.abs(dv) <= mv * np.abs(du), mu, mv)
+    nearest = np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v))
+    edge = np.where((du == 0) & (dv == 0), nearest, heading)
+    return np.clip(edge / EDGE_FADE, 0, 1)
 
 
 def _seen(p):
@@ -276,7 +290,7 @@ def trace_hiz(position, normal, projection, *, max_distance=15.0, thickness=0.5,
                 t = te
             if result is not None:
                 u, v, conf = result
-                fade = min(max(min(u, 1.0 - u, v, 1.0 - v) / EDGE_FADE, 0.0), 1.0)
+                fade = float(_fade((x + 0.5) / w, (y + 0.5) / h, u, v))
                 if isinstance(conf, str):  # the occluder: shown, but no hit found
                     out[y, x] = (u, v, fade, ENTERED_HIDDEN if conf == "entered" else 0.0)
                 else:

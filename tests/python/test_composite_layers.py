@@ -243,7 +243,13 @@ def settle_reference(uv, hidden, back_albedo):
             u, v, vis, hit = uv[y, x]
             if not hit > 0:
                 continue
-            edge = min(min(u, f32(1) - u), min(v, f32(1) - v))
+            # the fade toward the edge the pixel's ray heads for (glint/schema.h)
+            du, dv = u - (f32(x) + f32(0.5)) / f32(w), v - (f32(y) + f32(0.5)) / f32(h)
+            mu, mv = (f32(1) - u if du > 0 else u), (f32(1) - v if dv > 0 else v)
+            if du == 0 and dv == 0:
+                edge = min(min(u, f32(1) - u), min(v, f32(1) - v))
+            else:
+                edge = mu if mu * abs(dv) <= mv * abs(du) else mv
             fade = f32(min(max(edge / f32(edge_fade), f32(0)), f32(1)))
             if not vis < fade * f32(0.999):
                 continue

@@ -459,6 +459,9 @@ def test_antialiased_outlines_follow_the_coverage(name, resolution):
                               **dict(glint_core.presets()["balanced"], resolution=resolution, antialias=aa))
         inside &= (edge_fade(uv) == 1) | (uv[..., 2] == 0)  # the screen-edge fade is not coverage
         vis[aa] = uv[..., 2]
+    # nor is the frame's own cut: the sub-pixel rays of a border pixel whose ray runs
+    # along the border leave the frame (coverage 0.75) where no edge fade dims it
+    inside[[0, -1], :] = inside[:, [0, -1]] = False
     partial = inside & (coverage > 0) & (coverage < 1)
     err = {aa: np.abs(vis[aa] - coverage) for aa in vis}
     print(f"{name} {resolution}: total {err[0][inside].sum():.1f} -> {err[4][inside].sum():.1f}, "
@@ -545,3 +548,35 @@ def test_rays_past_a_convex_edge_report_nothing(degrees, backend, blocked, reque
         assert front.sum() > 200
         assert not (core[..., 2] > 0)[front].any()
         assert not (ref[..., 2] > 0)[front].any()
+
+
+@pytest.mark.parametrize("name", ["floor", "wall"])
+def test_the_fade_looks_at_the_edge_the_ray_heads_for(name):
+    """A reflection is cut where its rays leave the screen, so that is the edge to fade
+    at. A hit near an edge its ray runs along or away from (the floor's reflection of
+    something at the frame's side: the frame cuts the reflector and the object there
+    already) keeps its full visibility; one whose ray heads into the edge fades
+    (docs/marches.md, *Visibility*). The old rule, the nearest edge whatever the
+    direction, dimmed every one of these correct hits."""
+    gb, mh, _ = data(name, 160, 120)
+    uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"],
+                          **dict(glint_core.presets()["balanced"], resolution=1.0, antialias=0))
+    h, w = uv.shape[:2]
+    u, v = uv[..., 0].astype(float), uv[..., 1].astype(float)
+    err = np.hypot((u - mh["uv"][..., 0]) * w, (v - mh["uv"][..., 1]) * h)
+    good = (uv[..., 2] > 0) & mh["visible"] & (err <= 1.5)
+    fade = glint_core.schema()["constants"]["EDGE_FADE"]
+    near = good & (np.minimum(np.minimum(u, 1 - u), np.minimum(v, 1 - v)) < fade)
+    # where each ray's line from its pixel through its hit leaves the screen
+    y, x = np.mgrid[0:h, 0:w]
+    du, dv = u - (x + 0.5) / w, v - (y + 0.5) / h
+    with np.errstate(divide="ignore", invalid="ignore"):
+        su = np.where(du > 0, (1 - u) / du, np.where(du < 0, -u / du, np.inf))
+        sv = np.where(dv > 0, (1 - v) / dv, np.where(dv < 0, -v / dv, np.inf))
+    heading = np.where(su <= sv, np.where(du > 0, 1 - u, u), np.where(dv > 0, 1 - v, v))
+    away = near & (heading >= fade)
+    into = near & (heading < fade * 0.99)
+    print(f"{name}: {near.sum()} correct hits near an edge, {away.sum()} heading elsewhere, {into.sum()} into it")
+    assert away.sum() >= 100 and into.sum() >= 100
+    assert (uv[..., 2][away] > 0.9999).mean() >= 0.95  # full visibility, but for outline confidence
+    assert (uv[..., 2][into] <= np.clip(heading[into] / fade, 0, 1) + 1e-4).all()  # faded at least that much

@@ -15,6 +15,7 @@
 // single sources (the table of marches, the presets).
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
@@ -72,10 +73,32 @@ constexpr float kBehindSlack = 1e-3f;
 // chance that the object still covers the hit, outline_confidence()).
 constexpr float kEdgeFade = 0.075f;
 constexpr float kUncertain = 0.5f;
-// The fade of a hit at (u, v): 0 on the screen's edge, 1 from kEdgeFade in.
-inline float screen_edge_fade(float u, float v) {
-  const float edge = std::min(std::min(u, 1.0f - u), std::min(v, 1.0f - v));
+// The fade of a hit at (u, v) reflected at the pixel whose centre is at
+// (ou, ov): 0 on the screen's edge the ray is heading for, 1 from kEdgeFade in.
+// That edge is the first one the line from the pixel through the hit meets
+// beyond the hit. A reflection's neighbouring rays are cut off where they
+// cross that edge, so that is where a fade hides a hard line, in a still and
+// as things move. An edge the ray runs along or away from cuts the reflection
+// only where the frame cuts the reflector and the reflected object already,
+// so fading there dimmed true reflections for nothing (an object at the
+// frame's side, reflected in the floor under it). A hit on the pixel itself
+// (no direction) fades by its nearest edge. docs/marches.md, *Visibility*.
+inline float screen_edge_fade(float ou, float ov, float u, float v) {
+  const float du = u - ou, dv = v - ov;
+  const float mu = du > 0.0f ? 1.0f - u : u;  // to the edge each axis heads for
+  const float mv = dv > 0.0f ? 1.0f - v : v;
+  float edge;
+  if (du == 0.0f && dv == 0.0f)
+    edge = std::min(std::min(u, 1.0f - u), std::min(v, 1.0f - v));
+  else  // the edge reached first: mu / |du| against mv / |dv|, without dividing
+    edge = mu * std::fabs(dv) <= mv * std::fabs(du) ? mu : mv;
   return std::min(std::max(edge / kEdgeFade, 0.0f), 1.0f);
+}
+// The same for a hit of pixel (x, y) of a w x h image: what the march puts in
+// a report, and what the composite reads back out of it.
+inline float pixel_edge_fade(int x, int y, int w, int h, float u, float v) {
+  return screen_edge_fade((static_cast<float>(x) + 0.5f) / static_cast<float>(w),
+                          (static_cast<float>(y) + 0.5f) / static_cast<float>(h), u, v);
 }
 // blocked="occluder": the fourth channel (the hit's own visibility) of a ray
 // that came into an object by the side the camera does not see (its back

@@ -321,8 +321,23 @@ float outline_confidence(ivec2 c, vec3 p, vec3 n, float hx, float hy) {
   return conf;
 }
 
-float hit_visibility(float u, float v, float confidence) {
-  precise float edge = min(min(u, 1.0 - u), min(v, 1.0 - v));
+// screen_edge_fade() in glint/schema.h: the fade looks at the edge the ray of
+// pixel `origin` is heading for.
+float hit_visibility(ivec2 origin, float u, float v, float confidence) {
+  precise float ou = (float(origin.x) + 0.5) / u_size.x;
+  precise float ov = (float(origin.y) + 0.5) / u_size.y;
+  precise float du = u - ou;
+  precise float dv = v - ov;
+  precise float mu = du > 0.0 ? 1.0 - u : u;
+  precise float mv = dv > 0.0 ? 1.0 - v : v;
+  precise float edge;
+  if (du == 0.0 && dv == 0.0) {
+    edge = min(min(u, 1.0 - u), min(v, 1.0 - v));
+  } else {
+    precise float su = mu * abs(dv);
+    precise float sv = mv * abs(du);
+    edge = su <= sv ? mu : mv;
+  }
   precise float fade = edge / EDGE_FADE;
   fade = fade < 0.0 ? 0.0 : fade;
   fade = 1.0 < fade ? 1.0 : fade;
@@ -426,7 +441,7 @@ vec4 trace_ray(ivec2 origin) {
   // run once per pixel, not once per texel test of any lane.
   if (blocked) {
     vec2 o = (vec2(hit_c) + 0.5) / u_size;
-    return vec4(o, hit_visibility(o.x, o.y, 1.0), entered ? ENTERED_HIDDEN : 0.0);
+    return vec4(o, hit_visibility(origin, o.x, o.y, 1.0), entered ? ENTERED_HIDDEN : 0.0);
   }
   if (!hit) return vec4(0.0);
   precise float hx = g_f0.x + hit_t * g_d.x;
@@ -435,7 +450,7 @@ vec4 trace_ray(ivec2 origin) {
   precise float v = hy / u_size.y;
   if (!finite_f(u) || !finite_f(v)) return vec4(0.0);
   float conf = hit_located ? outline_confidence(hit_c, hit_p, hit_n, hx, hy) : UNCERTAIN;
-  float vis = hit_visibility(u, v, conf);
+  float vis = hit_visibility(origin, u, v, conf);
   return vec4(u, v, vis, vis);
 }
 

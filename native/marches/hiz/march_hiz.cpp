@@ -405,9 +405,10 @@ float outline_confidence(const Image& position, const HizPlanes& normal, const I
   return c;
 }
 
-// Confidence times the fade at the screen's edges, for a hit at (u, v).
-inline float hit_visibility(float u, float v, float confidence) {
-  return confidence * hiz::screen_edge_fade(u, v);
+// Confidence times the fade at the screen's edges, for a hit at (u, v) of
+// pixel (x, y)'s ray (the fade looks at the edge the ray is heading for).
+inline float hit_visibility(const Image& image, int x, int y, float u, float v, float confidence) {
+  return confidence * hiz::pixel_edge_fade(x, y, image.width, image.height, u, v);
 }
 
 // Rays made at a time (hiz_pixel_rays()): enough for the AVX2 set-up's
@@ -438,6 +439,7 @@ struct PixelQueue {
   float* samples = nullptr;
   Ray ray[kWalkLanes] = {};
   float* dst[kWalkLanes] = {};  // where each lane's answer goes
+  int px[kWalkLanes] = {};      // and the column of the pixel it is for (row y)
 };
 
 bool reuse_reports(const TraceInputs& in, const Image& out, int x, int y, float o[4]);
@@ -482,6 +484,7 @@ bool queue_start(void* ctx, int lane, WalkRay& w) {
     Ray& r = q.ray[lane];
     static_cast<RayFields&>(r) = q.rays[k];
     q.dst[lane] = q.out.px(x, q.y);
+    q.px[lane] = x;
     w = walk_from(r, x, q.y);
     return true;
   }
@@ -508,7 +511,7 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
     const float v = (static_cast<float>(j) + 0.5f) / static_cast<float>(pos.height);
     out[0] = u;
     out[1] = v;
-    out[2] = hit_visibility(u, v, 1.0f);
+    out[2] = hit_visibility(pos, q.px[lane], q.y, u, v, 1.0f);
     out[3] = hit == TexelOutcome::Entered ? kEnteredHidden : 0.0f;
     return false;
   }
@@ -519,7 +522,7 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
   const float confidence = located ? outline_confidence(pos, q.planes, back, q.s.opt.thickness, i, j, hx, hy) : kUncertain;
   out[0] = u;
   out[1] = v;
-  out[2] = out[3] = hit_visibility(u, v, confidence);
+  out[2] = out[3] = hit_visibility(pos, q.px[lane], q.y, u, v, confidence);
   return false;
 }
 
@@ -827,6 +830,7 @@ bool sample_start(void* ctx, int lane, WalkRay& w) {
     Ray& r = q.ray[lane];
     static_cast<RayFields&>(r) = q.rays[c];
     q.dst[lane] = o;
+    q.px[lane] = x;
     w = walk_from(r, x, q.y);
     return true;
   }
