@@ -21,7 +21,8 @@ difference is significant) it prints per method: strength = sum(m*c)/sum(c*c), t
 projection of its reflection on Cycles'; error = L1(m - c)/L1(c); the false area (the
 reflecting surfaces' pixels where Cycles' reflection is under the threshold but the
 method changes the frame by more than it, over the reflecting pixels); the largest change
-the method makes on the pixels that reflect nothing (off the reflecting surfaces); and
+the method makes on the pixels that reflect nothing (off the reflecting surfaces); how
+many pixels of the reflecting surfaces its frame leaves with a channel below 0; and
 the median wall time it adds to the Eevee frame. docs/look.md explains the method. Usage, from
 a checkout after building:
 
@@ -451,7 +452,11 @@ def run_scene(name, opts, state, tmp):
         strength, error, change, false_area = figures(diffs[method], c, reflecting, off, quiet, opts["threshold"])
         if method == "cycles":
             change = float(np.abs(c[off]).max()) if off.any() else 0.0
-        rows.append((name, method, strength, error, change, false_area, added[method]))
+        # A compositor that takes out more light than the frame holds leaves
+        # channels below 0: counted over the reflecting surfaces.
+        frame = cycles_frame if method == "cycles" else frames[method]
+        negative = int((on & (frame < -1e-4).any(axis=-1)).sum())
+        rows.append((name, method, strength, error, change, false_area, added[method], negative))
     # Cycles' own noise: one seed's reflection against the other's. The error of the
     # average of both (the reference) is about half of this.
     noise = figures(c_b, c_a, reflecting, off, quiet, opts["threshold"])[1]
@@ -496,12 +501,14 @@ def main():
           f"{kit.eevee_reflections_name(bpy.context.scene)}), {w}x{h}, Cycles {opts['cycles-samples']} samples (2 seeds x "
           f"{opts['cycles-samples'] // 2}), Eevee {opts['eevee-samples']} samples, threshold "
           f"{opts['threshold']}, time added: median of {opts['rounds']} rounds, add-on {opts['addon']}\n")
-    print("| scene | method | strength | error | false area | max change elsewhere | time added ms |")
-    print("|---|---|---:|---:|---:|---:|---:|")
-    for name, method, strength, error, change, false_area, added in all_rows:
+    print("| scene | method | strength | error | false area | max change elsewhere | negative pixels "
+          "| time added ms |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
+    for name, method, strength, error, change, false_area, added, negative in all_rows:
         ms = "-" if math.isnan(added) else f"{added:.0f}"
         k = opts["digits"]
-        print(f"| {name} | {method} | {strength:.{k}f} | {error:.{k}f} | {false_area:.3f} | {change:.4f} | {ms} |")
+        print(f"| {name} | {method} | {strength:.{k}f} | {error:.{k}f} | {false_area:.3f} | {change:.4f} "
+              f"| {negative} | {ms} |")
     print("\n| scene | reflecting pixels | surface pixels | pixels elsewhere | Cycles seed-to-seed error "
           "| Cycles s | Eevee s | Glint stages ms |")
     print("|---|---:|---:|---:|---:|---:|---:|---|")
