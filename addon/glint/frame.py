@@ -22,6 +22,7 @@ import numpy as np
 from . import compositor, exact_cache, gather, native
 from .host import nodes as host_nodes
 from .logic import compositing, geometry, reduced, settings as settings_logic, texels
+from .logic import world as world_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
 
@@ -244,6 +245,10 @@ def _rasterize_and_trace(frame: FrameState, size) -> bool:
     if "back_albedo" in gbuf:
         kw["back_albedo"] = gbuf["back_albedo"]
     kw.update(mesh_kwargs(core, exp, kw["march"], frame.note))
+    # Under a uniform world the engine's specular is W x the world colour at
+    # every texel, so the core can take a hit's own specular along the ray
+    # instead of as the camera sees it (docs/look-core.md, *The hit's own specular*).
+    kw["world_specular"] = STATE.specular_source == world_logic.SOURCE_WORLD
     if used == "gl" and not core.march_details()[kw["march"]]["gl"]:
         log(f"march '{kw['march']}' has no OpenGL form: it traces on the CPU")
     proj32 = exp.camera.projection.astype(np.float32)
@@ -329,7 +334,9 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
     if view != "NONE" or frame.values["write_layers_exr"] or not placeable:
         region = (0, 0, cam.width, cam.height)
     else:
-        region = compositing.image_region(uv[..., 3], weight[..., 3])
+        # A hit's replaced share can fall to 0 or below (the hit's own specular
+        # taken along the ray): its vis still marks it.
+        region = compositing.image_region(np.maximum(uv[..., 2], uv[..., 3]), weight[..., 3])
     keys = {compositing.IMAGE_FINE: (region, cam.width, cam.height)}
     offset = (0.0, 0.0)
     hidden_imgs = {}

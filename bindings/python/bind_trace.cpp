@@ -111,7 +111,7 @@ pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& no
                               const pyb::handle& specular, const pyb::handle& projection, float max_distance,
                               float resolution, int steps, float thickness, const std::string& march,
                               int antialias, const std::string& blocked, const pyb::handle& back_position,
-                              const pyb::handle& mesh, const pyb::handle& back_albedo,
+                              const pyb::handle& mesh, const pyb::handle& back_albedo, bool world_specular,
                               const std::string& backend, int threads, double memory_limit_mb) {
   if (specular.is_none()) throw InvalidArgument("specular", "expected a float32 [H, W, 4] array, got None");
   const TraceCall c = trace_call("composite_layers", position, normal, projection, max_distance, resolution,
@@ -121,7 +121,7 @@ pyb::dict py_composite_layers(const pyb::handle& position, const pyb::handle& no
   CompositeLayers layers;
   {
     pyb::gil_scoped_release release;
-    layers = composite_layers(*c.be, c.inputs(), c.opt, threads, albedo ? &*albedo : nullptr);
+    layers = composite_layers(*c.be, c.inputs(), c.opt, threads, albedo ? &*albedo : nullptr, world_specular);
   }
   pyb::dict out;
   out["uv"] = array_from_image(std::move(layers.uv));
@@ -203,6 +203,7 @@ void bind_trace(pyb::module_& m) {
         "thickness"_a = t.thickness, "march"_a = s::march.initial_name, "antialias"_a = t.antialias,
         "blocked"_a = to_string(t.blocked),
         "back_position"_a = pyb::none(), "mesh"_a = pyb::none(), "back_albedo"_a = pyb::none(),
+        "world_specular"_a = false,
         "backend"_a = s::backend.initial_name, "threads"_a = s::threads.initial_int(),
         "memory_limit_mb"_a = t.memory_limit_mb,
         "What a compositor that samples the reflection colour itself needs per frame, in one call\n"
@@ -214,7 +215,10 @@ void bind_trace(pyb::module_& m) {
         "back_albedo: optional float32 [H, W, 4], rasterize()'s back_albedo: adds 'hidden' (hidden_sides():\n"
         "(albedo, vis) where a ray met an object's hidden side, whose uv then has vis 0; with the hiz\n"
         "march also the uncertain shares of settle_uncertain_shares(), whose uv keeps its vis) and\n"
-        "'hidden_pixels'. Trace keywords as trace(); nothing is traced when no pixel reflects.");
+        "'hidden_pixels'. world_specular: the engine's specular is W x one colour everywhere (a uniform\n"
+        "world); `replaced` then also takes out the part of each hit's own specular that the camera\n"
+        "sees and the ray does not (reweight_hit_specular() in glint/composite.h; it may leave [0, 1]).\n"
+        "Trace keywords as trace(); nothing is traced when no pixel reflects.");
   m.def(
       "hidden_sides",
       [](const pyb::handle& uv, const pyb::handle& back_albedo) {

@@ -12,7 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "glint/brdf.h"
 #include "glint/errors.h"
+#include "glint/projection.h"
 #include "glint/validation.h"
 #include "parallel.h"
 
@@ -404,8 +406,58 @@ void positive_bin_means(const float* values, std::ptrdiff_t row_stride, std::ptr
   });
 }
 
+void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in, int threads) {
+  const Image& pos = in.position;
+  const Image& nrm = in.normal;
+  const Image& spec = *in.specular;
+  const int w = uv.width, h = uv.height;
+  const CameraEye eye = camera_eye(in.projection);
+  const float* table = env_brdf_table().data();  // built once, before the workers share it
+  auto unit = [](const float* v, float out[3]) {
+    const float n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if (!(n2 > 0.0f) || n2 - n2 != 0.0f) return false;
+    const float inv = 1.0f / std::sqrt(n2);
+    out[0] = v[0] * inv, out[1] = v[1] * inv, out[2] = v[2] * inv;
+    return true;
+  };
+  parallel_rows(0, h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      float* o = uv.px(x, y);
+      if (!(o[2] > 0.0f)) continue;  // no hit (a hidden side has vis 0 here)
+      int i = 0, j = 0;
+      if (!uv.texel_at(o[0] * static_cast<float>(w), o[1] * static_cast<float>(h), i, j)) continue;
+      const float* wc = weight.px(i, j);
+      const float* sh = spec.px(i, j);
+      if (!is_reflective(sh)) continue;  // the hit shows no engine specular
+      const float* p = pos.px(x, y);
+      float d[3], n[3], nh[3];
+      if (eye.kind == EyeKind::Origin) {
+        d[0] = p[0], d[1] = p[1], d[2] = p[2];
+      } else if (eye.kind == EyeKind::Point) {
+        d[0] = p[0] - eye.eye[0], d[1] = p[1] - eye.eye[1], d[2] = p[2] - eye.eye[2];
+      } else {
+        d[0] = eye.eye[0], d[1] = eye.eye[1], d[2] = eye.eye[2];
+      }
+      if (!unit(d, d) || !unit(nrm.px(x, y), n) || !unit(nrm.px(i, j), nh)) continue;
+      const float dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+      const float r[3] = {d[0] - 2.0f * dn * n[0], d[1] - 2.0f * dn * n[1], d[2] - 2.0f * dn * n[2]};
+      const float nv = -(r[0] * nh[0] + r[1] * nh[1] + r[2] * nh[2]);
+      float a = 0.0f, b = 0.0f;
+      env_brdf_lookup(table, std::min(std::max(nv, 0.0f), 1.0f), ggx_alpha_of(sh), &a, &b);
+      const float along_ray = ((sh[0] * a + b) + (sh[1] * a + b) + (sh[2] * a + b)) / 3.0f;
+      // The weight image's alpha is the lod by now: the mean of its rgb.
+      // Only the part of the hit's specular that is still the world colour:
+      // where the hit has a reflection of its own (its vis), the second
+      // bounce puts that in, at the camera's weight.
+      const float own = std::min(std::max(uv.px(i, j)[2], 0.0f), 1.0f);
+      const float k = ((wc[0] + wc[1] + wc[2]) / 3.0f - along_ray) * (1.0f - own);
+      if (k - k == 0.0f) o[3] += o[2] * k;
+    }
+  });
+}
+
 CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
-                                 int threads, const Image* back_albedo) {
+                                 int threads, const Image* back_albedo, bool world_specular) {
   require_trace_inputs(in, opt);
   if (!in.specular) throw InvalidArgument("specular", "composite_layers needs the specular buffer");
   const Image& spec = *in.specular;
@@ -466,6 +518,7 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
       }
     }
   });
+  if (world_specular) reweight_hit_specular(out.uv, out.weight, in, threads);
   return out;
 }
 

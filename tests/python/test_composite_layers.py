@@ -441,3 +441,55 @@ def test_read_inside_outlines_refuses_bad_input():
         glint_core.read_inside_outlines(uv[:5], gb["position"])
     with pytest.raises(ValueError, match="thickness"):
         glint_core.read_inside_outlines(uv, gb["position"], thickness=float("nan"))
+
+
+def test_a_hits_own_specular_is_taken_along_the_ray():
+    """world_specular: the colour a hit samples holds its surface's specular as the
+    camera sees it, W(hit) x colour at the camera's N.V there. Along the ray the
+    surface shows W'(hit) x colour, W' the split-sum weight at N.V = -ray . normal(hit);
+    `replaced` grows by vis x (W - W') so that a compositor subtracting replaced x colour
+    reflects the hit as the ray sees it (docs/look-core.md, *The hit's own specular*),
+    but for the share the hit's own reflection (its vis) replaces.
+    A corridor of glossy dielectric walls at grazing angles, computed here in numpy from
+    env_brdf() and specular_weight(): the hits on the walls differ from the camera's
+    view by 0.05 and more."""
+    import math
+    glossy = A.Material(color=(0.5, 0.5, 0.5), specular=(0.04, 0.04, 0.04), alpha=0.9)
+    sc = A.Scene([A.Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), glossy),
+                  A.Box((-2.2, -2.0, 0.0), (-1.8, 40.0, 3.0), glossy),
+                  A.Box((1.8, -2.0, 0.0), (2.2, 40.0, 3.0), glossy)],
+                 A.Camera(eye=(0.0, -1.5, 0.45), target=(0.0, 30.0, 0.25), fov=math.radians(60.0), near=0.05,
+                          far=200.0))
+    gb = A.render(sc, 96, 64)
+    args = (gb["position"], gb["normal"], gb["specular"], gb["projection"])
+    kw = dict(glint_core.presets()["balanced"], resolution=1.0, antialias=0)
+    plain = glint_core.composite_layers(*args, **kw)
+    along = glint_core.composite_layers(*args, **kw, world_specular=True)
+    uv = plain["uv"]
+    assert np.array_equal(along["uv"][..., :3], uv[..., :3]) and np.array_equal(along["weight"], plain["weight"])
+    h, w = uv.shape[:2]
+    vis = uv[..., 2]
+    i = np.clip(np.floor(uv[..., 0] * w).astype(int), 0, w - 1)
+    j = np.clip(np.floor(uv[..., 1] * h).astype(int), 0, h - 1)
+    cam = glint_core.specular_weight(gb["position"], gb["normal"], gb["specular"], gb["projection"])[..., :3]
+    p = gb["position"][..., :3].astype(float)
+    n = gb["normal"][..., :3].astype(float)
+    d = p / np.maximum(np.linalg.norm(p, axis=-1, keepdims=True), 1e-30)
+    n = n / np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-30)
+    ray = d - 2.0 * (d * n).sum(-1, keepdims=True) * n
+    want = uv[..., 3].astype(float).copy()
+    k_all = np.zeros((h, w))
+    for y, x in zip(*np.nonzero(vis > 0)):
+        s = gb["specular"][j[y, x], i[y, x]]
+        if not s[:3].mean() > 0:
+            continue
+        nh = n[j[y, x], i[y, x]]
+        nv = min(max(-float(ray[y, x] @ nh), 0.0), 1.0)
+        a, b = glint_core.env_brdf(nv, glint_core.ggx_alpha(float(s[3])))
+        own = min(max(float(uv[j[y, x], i[y, x], 2]), 0.0), 1.0)  # the hit's own reflection keeps its weight
+        k = (cam[j[y, x], i[y, x]].mean() - float(np.mean(s[:3] * a + b))) * (1.0 - own)
+        k_all[y, x] = k
+        want[y, x] += vis[y, x] * k
+    assert (np.abs(k_all) > 0.05).sum() > 100, "the walls' hits should see their specular otherwise"
+    assert np.allclose(along["uv"][..., 3], want, atol=2e-4)
+    assert np.array_equal(plain["uv"][..., 3], uv[..., 2])  # without it: replaced is vis

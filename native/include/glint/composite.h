@@ -117,11 +117,29 @@ void positive_bin_means(const float* values, std::ptrdiff_t row_stride, std::ptr
                         int cols, const int* row_bin, const int* col_bin, int bin_rows, int bin_cols, float* out,
                         int threads = 0);
 
+// Where the engine's specular at every texel is W x one colour (a uniform
+// world: the add-on's "world colour" path), the colour a hit samples holds
+// its own surface's specular as the camera sees it, W(hit) x colour with
+// W at the camera's N.V there. The ray that meets it sees that surface from
+// elsewhere: along the ray its specular is W'(hit) x colour, W' the same
+// split-sum weight at N.V = -ray . normal(hit). So the share of the colour
+// a compositor takes out grows by vis x (W(hit) - W'(hit)) (rgb means) x
+// (1 - the hit's own vis): where the hit has a reflection of its own, a
+// second bounce puts that in, and it keeps the camera's weight:
+// `replaced` += vis x k. It can leave [0, 1]; a compositor that subtracts
+// replaced x colour before weighting then reflects the hit as the ray sees it
+// (docs/look-core.md, *The hit's own specular*). `weight` is
+// composite_layers()'s (its alpha already the lod), `uv` its final uv.
+void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in, int threads = 0);
+
 // Trace on `backend` (specular given: only reflective pixels are traced),
 // then the weight on the same backend and the lod. No trace, weight or lod
 // when nothing reflects (all zero, reflective_pixels 0). With back_albedo
-// (same size as the position), also the hidden sides (hidden_sides()).
+// (same size as the position), also the hidden sides (hidden_sides()). With
+// world_specular, the hits' own specular is taken along the ray
+// (reweight_hit_specular()).
 CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const TraceOptions& opt,
-                                 int threads = 0, const Image* back_albedo = nullptr);
+                                 int threads = 0, const Image* back_albedo = nullptr,
+                                 bool world_specular = false);
 
 }  // namespace glint
