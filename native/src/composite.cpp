@@ -411,26 +411,20 @@ void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in
   const Image& nrm = in.normal;
   const Image& spec = *in.specular;
   const int w = uv.width, h = uv.height;
+  const float fw = static_cast<float>(w), fh = static_cast<float>(h);
   const CameraEye eye = camera_eye(in.projection);
   const float* table = env_brdf_table().data();  // built once, before the workers share it
-  auto unit = [](const float* v, float out[3]) {
-    const float n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    if (!(n2 > 0.0f) || n2 - n2 != 0.0f) return false;
-    const float inv = 1.0f / std::sqrt(n2);
-    out[0] = v[0] * inv, out[1] = v[1] * inv, out[2] = v[2] * inv;
-    return true;
-  };
+  auto dot = [](const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
   parallel_rows(0, h, threads, [&](int y) {
     for (int x = 0; x < w; ++x) {
       float* o = uv.px(x, y);
       if (!(o[2] > 0.0f)) continue;  // no hit (a hidden side has vis 0 here)
       int i = 0, j = 0;
-      if (!uv.texel_at(o[0] * static_cast<float>(w), o[1] * static_cast<float>(h), i, j)) continue;
-      const float* wc = weight.px(i, j);
+      if (!uv.texel_at(o[0] * fw, o[1] * fh, i, j)) continue;
       const float* sh = spec.px(i, j);
       if (!is_reflective(sh)) continue;  // the hit shows no engine specular
       const float* p = pos.px(x, y);
-      float d[3], n[3], nh[3];
+      float d[3];
       if (eye.kind == EyeKind::Origin) {
         d[0] = p[0], d[1] = p[1], d[2] = p[2];
       } else if (eye.kind == EyeKind::Point) {
@@ -438,10 +432,13 @@ void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in
       } else {
         d[0] = eye.eye[0], d[1] = eye.eye[1], d[2] = eye.eye[2];
       }
-      if (!unit(d, d) || !unit(nrm.px(x, y), n) || !unit(nrm.px(i, j), nh)) continue;
-      const float dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-      const float r[3] = {d[0] - 2.0f * dn * n[0], d[1] - 2.0f * dn * n[1], d[2] - 2.0f * dn * n[2]};
-      const float nv = -(r[0] * nh[0] + r[1] * nh[1] + r[2] * nh[2]);
+      const float* n = nrm.px(x, y);
+      const float* nh = nrm.px(i, j);
+      // -ray . n(hit) for the unit vectors, from the unnormalised ones: the
+      // mirror of d about n is d - 2 (d.n / n.n) n.
+      const float nn = dot(n, n);
+      const float nv = -(dot(d, nh) - 2.0f * dot(d, n) * dot(n, nh) / nn) / std::sqrt(dot(d, d) * dot(nh, nh));
+      if (!(nv - nv == 0.0f)) continue;  // a zero or non-finite vector
       float a = 0.0f, b = 0.0f;
       env_brdf_lookup(table, std::min(std::max(nv, 0.0f), 1.0f), ggx_alpha_of(sh), &a, &b);
       const float along_ray = ((sh[0] * a + b) + (sh[1] * a + b) + (sh[2] * a + b)) / 3.0f;
@@ -449,6 +446,7 @@ void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in
       // Only the part of the hit's specular that is still the world colour:
       // where the hit has a reflection of its own (its vis), the second
       // bounce puts that in, at the camera's weight.
+      const float* wc = weight.px(i, j);
       const float own = std::min(std::max(uv.px(i, j)[2], 0.0f), 1.0f);
       const float k = ((wc[0] + wc[1] + wc[2]) / 3.0f - along_ray) * (1.0f - own);
       if (k - k == 0.0f) o[3] += o[2] * k;
