@@ -425,13 +425,7 @@ void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in
       if (!is_reflective(sh)) continue;  // the hit shows no engine specular
       const float* p = pos.px(x, y);
       float d[3];
-      if (eye.kind == EyeKind::Origin) {
-        d[0] = p[0], d[1] = p[1], d[2] = p[2];
-      } else if (eye.kind == EyeKind::Point) {
-        d[0] = p[0] - eye.eye[0], d[1] = p[1] - eye.eye[1], d[2] = p[2] - eye.eye[2];
-      } else {
-        d[0] = eye.eye[0], d[1] = eye.eye[1], d[2] = eye.eye[2];
-      }
+      incident_toward(eye, p, d);
       const float* n = nrm.px(x, y);
       const float* nh = nrm.px(i, j);
       // -ray . n(hit) for the unit vectors, from the unnormalised ones: the

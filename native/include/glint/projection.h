@@ -33,6 +33,17 @@ struct CameraEye {
   float eye[3] = {0.0f, 0.0f, 0.0f};
 };
 CameraEye camera_eye(const Mat4& projection);
+// The incident direction toward view point p, unnormalised, by the eye's kind
+// (what the march's read_origin() normalises).
+inline void incident_toward(const CameraEye& eye, const float* p, float d[3]) {
+  if (eye.kind == EyeKind::Origin) {
+    d[0] = p[0], d[1] = p[1], d[2] = p[2];
+  } else if (eye.kind == EyeKind::Point) {
+    d[0] = p[0] - eye.eye[0], d[1] = p[1] - eye.eye[1], d[2] = p[2] - eye.eye[2];
+  } else {
+    d[0] = eye.eye[0], d[1] = eye.eye[1], d[2] = eye.eye[2];
+  }
+}
 
 // The inverse of a matrix validate_projection() accepts.
 Mat4 inverse(const Mat4& p);

@@ -72,13 +72,7 @@ Image specular_weight(const Image& position, const Image& normal, const Image& s
       if (nn == 0.0f) continue;
       // The incident direction as the march uses it (cpu/ray.cpp read_origin).
       float d[3];
-      if (eye.kind == EyeKind::Origin) {
-        d[0] = p[0], d[1] = p[1], d[2] = p[2];
-      } else if (eye.kind == EyeKind::Point) {
-        d[0] = p[0] - eye.eye[0], d[1] = p[1] - eye.eye[1], d[2] = p[2] - eye.eye[2];
-      } else {
-        d[0] = eye.eye[0], d[1] = eye.eye[1], d[2] = eye.eye[2];
-      }
+      incident_toward(eye, p, d);
       const float dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
       if (!(dd > 0.0f) || !finite_f(dd)) continue;
       const float inv_n = 1.0f / std::sqrt(nn), inv_d = 1.0f / std::sqrt(dd);
