@@ -14,6 +14,7 @@
 
 #include "glint/brdf.h"
 #include "glint/errors.h"
+#include "glint/material.h"
 #include "glint/projection.h"
 #include "glint/validation.h"
 #include "parallel.h"
@@ -433,9 +434,9 @@ void reweight_hit_specular(Image& uv, const Image& weight, const TraceInputs& in
       const float nn = dot(n, n);
       const float nv = -(dot(d, nh) - 2.0f * dot(d, n) * dot(n, nh) / nn) / std::sqrt(dot(d, d) * dot(nh, nh));
       if (!(nv - nv == 0.0f)) continue;  // a zero or non-finite vector
-      float a = 0.0f, b = 0.0f;
-      env_brdf_lookup(table, std::min(std::max(nv, 0.0f), 1.0f), ggx_alpha_of(sh), &a, &b);
-      const float along_ray = ((sh[0] * a + b) + (sh[1] * a + b) + (sh[2] * a + b)) / 3.0f;
+      float wr[3];
+      split_sum_weight(table, sh, std::min(std::max(nv, 0.0f), 1.0f), wr);
+      const float along_ray = (wr[0] + wr[1] + wr[2]) / 3.0f;
       // The weight image's alpha is the lod by now: the mean of its rgb.
       // Only the part of the hit's specular that is still the world colour:
       // where the hit has a reflection of its own (its vis), the second

@@ -6,6 +6,7 @@
 #pragma once
 #include <cmath>
 
+#include "glint/brdf.h"
 #include "glint/image.h"
 #include "glint/schema.h"
 
@@ -43,6 +44,15 @@ inline float ggx_alpha_of(const float* spec) {
 }
 // Whether the cone blurs a pixel's reflection: its lobe has a width.
 inline bool is_glossy(const float* spec) { return ggx_alpha_of(spec) > 0.0f; }
+// The split-sum weight F0 * A + B of specular-buffer pixel `spec` seen at
+// n_dot_v (in [0, 1]), per channel, from the table at hand
+// (env_brdf_table().data()): what Backend::specular_weight() writes for the
+// camera's view, and what the composite asks for other views.
+inline void split_sum_weight(const float* table, const float* spec, float n_dot_v, float w[3]) {
+  float a, b;
+  env_brdf_lookup(table, n_dot_v, ggx_alpha_of(spec), &a, &b);
+  for (int k = 0; k < 3; ++k) w[k] = spec[k] * a + b;
+}
 // tan of the half-angle of a GGX reflection cone: the half-vector cone that
 // holds half of D's projected mass has tan = alpha, the reflected direction
 // turns twice as far: tan(2 atan(alpha)) = 2 alpha / (1 - alpha^2), capped

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "glint/brdf.h"
+#include "glint/material.h"
 #include "glint/stages.h"
 #include "parallel.h"
 
@@ -78,10 +79,8 @@ Image specular_weight(const Image& position, const Image& normal, const Image& s
       const float inv_n = 1.0f / std::sqrt(nn), inv_d = 1.0f / std::sqrt(dd);
       const float dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
       const float n_dot_v = clamp01(-(dn * inv_n * inv_d));
-      float a, b;
-      env_brdf_lookup(table, n_dot_v, ggx_alpha_of(s), &a, &b);
       float* o = out.px(x, y);
-      for (int k = 0; k < 3; ++k) o[k] = s[k] * a + b;
+      split_sum_weight(table, s, n_dot_v, o);
       o[3] = (o[0] + o[1] + o[2]) / 3.0f;
     }
   });
