@@ -49,6 +49,19 @@ def crash_report(out: str) -> str:
     return text
 
 
+def driver_errors(path: str) -> str:
+    """What ui_driver.py caught before it exited with status 3 (it writes its
+    tracebacks to result.json, not to the log)."""
+    if not os.path.isfile(path):
+        return ""
+    try:
+        with open(path) as f:
+            errors = json.load(f).get("errors") or []
+    except ValueError as exc:
+        return f"\n--- result.json unreadable: {exc}"
+    return "".join(f"\n--- ui_driver error:\n{e}" for e in errors)
+
+
 def run_ui(setup, blend, out, config, timeout=150):
     """One Blender session with a window; returns (result dict, log)."""
     os.makedirs(out, exist_ok=True)
@@ -67,7 +80,8 @@ def run_ui(setup, blend, out, config, timeout=150):
         f.write(log)
     path = os.path.join(out, "result.json")
     assert proc.returncode == 0 and os.path.isfile(path), \
-        f"Blender with a window failed or hung (exit {proc.returncode}):\n{log[-4000:]}{crash_report(out)}"
+        f"Blender with a window failed or hung (exit {proc.returncode}):\n{log[-4000:]}{driver_errors(path)}" \
+        f"{crash_report(out)}"
     with open(path) as f:
         res = json.load(f)
     assert not res["errors"], res["errors"]
