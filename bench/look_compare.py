@@ -22,8 +22,10 @@ projection of its reflection on Cycles'; error = L1(m - c)/L1(c); the false area
 reflecting surfaces' pixels where Cycles' reflection is under the threshold but the
 method changes the frame by more than it, over the reflecting pixels); the largest change
 the method makes on the pixels that reflect nothing (off the reflecting surfaces); how
-many pixels of the reflecting surfaces its frame leaves with a channel below 0; and
-the median wall time it adds to the Eevee frame. docs/look.md explains the method. Usage, from
+many pixels of the reflecting surfaces its frame leaves with a channel below 0; the
+frame error, L1(frame - Cycles' frame)/L1(c) over the same pixels, the whole frame
+judged rather than its change (with plain Eevee's, the frame every method starts from,
+in the second table); and the median wall time it adds to the Eevee frame. docs/look.md explains the method. Usage, from
 a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
@@ -368,6 +370,17 @@ def figures(diff, c, reflecting, elsewhere, quiet, threshold):
     return strength, error, change, false_area
 
 
+def frame_error(frame, cycles_frame, c, reflecting):
+    """The whole frame against Cycles' over the reflecting pixels, L1(frame -
+    Cycles' frame) / L1(c), on the error's scale. The difference figures compare
+    what a method changes with what the reflections change in Cycles; this one
+    also sees what the method's frame started from, which they cancel: where
+    Eevee's own ambient occlusion has already taken out part of the world's
+    specular (Eevee Legacy), replacing all of it darkens the frame below Cycles'
+    while its difference matches (docs/look.md, *Frame error*)."""
+    return float(np.abs(frame[reflecting] - cycles_frame[reflecting]).sum() / np.abs(c[reflecting]).sum())
+
+
 def _srgb(linear):
     x = np.clip(linear, 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
@@ -456,7 +469,8 @@ def run_scene(name, opts, state, tmp):
         # channels below 0: counted over the reflecting surfaces.
         frame = cycles_frame if method == "cycles" else frames[method]
         negative = int((on & (frame < -1e-4).any(axis=-1)).sum())
-        rows.append((name, method, strength, error, change, false_area, added[method], negative))
+        rows.append((name, method, strength, error, frame_error(frame, cycles_frame, c, reflecting), change,
+                     false_area, added[method], negative))
     # Cycles' own noise: one seed's reflection against the other's. The error of the
     # average of both (the reference) is about half of this.
     noise = figures(c_b, c_a, reflecting, off, quiet, opts["threshold"])[1]
@@ -479,7 +493,7 @@ def run_scene(name, opts, state, tmp):
                                                                                   "normal", "specular", "projection")
                                if k in state.arrays})
     info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
-                noise=noise, cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
+                noise=noise, plain_frame_error=frame_error(frames["plain"], cycles_frame, c, reflecting), cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
     return rows, info
 
 
@@ -501,21 +515,21 @@ def main():
           f"{kit.eevee_reflections_name(bpy.context.scene)}), {w}x{h}, Cycles {opts['cycles-samples']} samples (2 seeds x "
           f"{opts['cycles-samples'] // 2}), Eevee {opts['eevee-samples']} samples, threshold "
           f"{opts['threshold']}, time added: median of {opts['rounds']} rounds, add-on {opts['addon']}\n")
-    print("| scene | method | strength | error | false area | max change elsewhere | negative pixels "
-          "| time added ms |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|")
-    for name, method, strength, error, change, false_area, added, negative in all_rows:
+    print("| scene | method | strength | error | frame error | false area | max change elsewhere "
+          "| negative pixels | time added ms |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    k = opts["digits"]
+    for name, method, strength, error, frame_err, change, false_area, added, negative in all_rows:
         ms = "-" if math.isnan(added) else f"{added:.0f}"
-        k = opts["digits"]
-        print(f"| {name} | {method} | {strength:.{k}f} | {error:.{k}f} | {false_area:.3f} | {change:.4f} "
-              f"| {negative} | {ms} |")
+        print(f"| {name} | {method} | {strength:.{k}f} | {error:.{k}f} | {frame_err:.{k}f} | {false_area:.3f} "
+              f"| {change:.4f} | {negative} | {ms} |")
     print("\n| scene | reflecting pixels | surface pixels | pixels elsewhere | Cycles seed-to-seed error "
-          "| Cycles s | Eevee s | Glint stages ms |")
-    print("|---|---:|---:|---:|---:|---:|---:|---|")
+          "| plain Eevee frame error | Cycles s | Eevee s | Glint stages ms |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---|")
     for name, i in infos.items():
         stages = ", ".join(f"{k} {v:.0f}" for k, v in i["glint_stages"].items())
         print(f"| {name} | {i['pixels']} | {i['surface']} | {i['elsewhere']} | {i['noise']:.3f} "
-              f"| {i['cycles_s']:.0f} | {i['eevee_s']:.0f} | {stages} |")
+              f"| {i['plain_frame_error']:.{k}f} | {i['cycles_s']:.0f} | {i['eevee_s']:.0f} | {stages} |")
 
 
 main()
