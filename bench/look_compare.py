@@ -25,8 +25,8 @@ the method makes on the pixels that reflect nothing (off the reflecting surfaces
 many pixels of the reflecting surfaces its frame leaves with a channel below 0; the
 frame error, L1(frame - Cycles' frame)/L1(c) over the same pixels, the whole frame
 judged rather than its change (with plain Eevee's, the frame every method starts from,
-in the second table); and the median wall time it adds to the Eevee frame. docs/look.md explains the method. Usage, from
-a checkout after building:
+in the second table); and the median wall time it adds to the Eevee frame.
+docs/look.md explains the method. Usage, from a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
       [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
@@ -493,7 +493,8 @@ def run_scene(name, opts, state, tmp):
                                                                                   "normal", "specular", "projection")
                                if k in state.arrays})
     info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
-                noise=noise, plain_frame_error=frame_error(frames["plain"], cycles_frame, c, reflecting), cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
+                noise=noise, plain_frame_error=frame_error(frames["plain"], cycles_frame, c, reflecting),
+                cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
     return rows, info
 
 
