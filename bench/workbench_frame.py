@@ -10,7 +10,7 @@ Glint on and off alternate per round; medians after a warm-up.
 to compare two group layouts in turn on the same core. ``--off`` names switches of
 the Glint panel (boolean settings of ``scene.glint``, e.g. ``fill_hidden``): each
 adds a render with Glint on and that setting off to every round, so what the
-setting costs comes from the same rounds. docs/addon.md (*The first level as a 3x3
+setting costs comes from the same rounds. docs/frame-cost.md (*The first level as a 3x3
 filter*, *Hidden sides: what they cost*) has the figures.
 """
 from __future__ import annotations

@@ -154,7 +154,7 @@ def scale_offset_places_read() -> bool:
     """Whether the Scale's own offsets place its read where 3.x-4.1's Scale
     reads (``compositing.coarse_scale_offset``): 4.2-4.3's compositor, which
     realizes every node's output, so a Translate after the Scale would
-    resample it (docs/addon.md, *On 4.3: what a node costs, and how its Scale
+    resample it (docs/frame-cost.md, *On 4.3: what a node costs, and how its Scale
     reads*). Measured
     on 4.3 to 4e-5 at 1920x1080 but for the frame's last row and column. No
     feature of the API tells this compositor from 4.4-4.5's, which were not
@@ -246,7 +246,7 @@ def soften_is_a_filter() -> bool:
     and 1.08x on the Tiled-era compositor of 3.x-4.1
     (compositor_places_regions), whose filter reads its neighbours tile by
     tile; there the sampled Gaussian costs a fifth of the Fast Gaussian it
-    replaced (docs/addon.md, *The first level as a 3x3 filter*)."""
+    replaced (docs/frame-cost.md, *The first level as a 3x3 filter*)."""
     return not compositor_places_regions()
 
 

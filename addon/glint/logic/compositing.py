@@ -85,7 +85,7 @@ rise in order (s_j > 0 only where s_{j-1} = 1), the chain
 mix(mix(mix(D, B1, s1), B2, s2), ...) equals mix(mix(D, B1, s1), Q, s2) with Q
 the coarse mix of B2..B4: exact up to a texel's lod standing for its pixels'.
 The texels lie on the frame's grid, so a region reads the same canvas as the
-whole frame. Measured in docs/addon.md (*The coarse levels*, *The coarse
+whole frame. Measured in docs/frame-cost.md (*The coarse levels*, *The coarse
 levels read back by a Scale*).
 
 Hidden sides: a ray that comes into an object by the side the camera does not
@@ -229,12 +229,12 @@ GBUFFER_DEBUG_VIEWS = ("POSITION", "NORMAL", "SPECULAR", "UV", "VISIBILITY")
 # footprint (share 1), but a Gaussian that wide spreads the GGX lobe's narrow
 # core as far as its long tail: against Cycles (bench/look_compare.py, 3.4)
 # share 1 gave error 0.26 on the rough floor and 0.19 on the metal sphere,
-# share 0.5 gave 0.23 and 0.16 (docs/addon.md, *The coarse levels*).
+# share 0.5 gave 0.23 and 0.16 (docs/frame-cost.md, *The coarse levels*).
 HALF_ENERGY_SIGMA = 1.0 / (2.0 * math.sqrt(2.0 * math.log(2.0)))
 LEVEL_FOOTPRINT_SHARE = 0.5
 # The first level is Blender's Filter node, Soften: the 3x3 binomial kernel
 # (1 2 1)^T (1 2 1) / 16, whose variance is 1/2 along each axis, at a quarter
-# of a Fast Gaussian's cost on 5.2 (docs/addon.md, *The first level as a 3x3
+# of a Fast Gaussian's cost on 5.2 (docs/frame-cost.md, *The first level as a 3x3
 # filter*). It keeps the Fast Gaussian's place at lod 2, where the rule above
 # asks for sigma 0.85: placed at its own lod by the rule (1.74) it blurred the
 # pixels between the two more, and look_compare's metal sphere moved away from
@@ -637,7 +637,7 @@ def dead_nodes(states: Dict[str, bool]) -> frozenset:
     The add-on mutes them. Blender 5.x's compositor evaluates both inputs of a
     Switch, the side it drops included, so without the mute the second
     bounce's Map UV and the other read-back of the coarse levels ran on every
-    frame that did not use them (docs/addon.md, *Both sides of a Switch*); a
+    frame that did not use them (docs/frame-cost.md, *Both sides of a Switch*); a
     muted node passes its first input through and computes nothing. 3.4's
     and 4.3's compositors skip the dropped side themselves, so there the mute
     changes nothing. Every output of the group counts, not only the frame's:
@@ -827,7 +827,7 @@ def coarse_grid_shift(width: int, height: int) -> Tuple[float, float]:
     u = (x + 0.5 - t) cw / W - 0.5 - c, where c is -0.5 when cw and W differ
     in parity and 0 otherwise (Blender keeps a canvas centred on the frame's
     centre; the half-texel c puts an odd canvas's centre texel there). Solved
-    for u = x cw / W: t = 0.5 - (0.5 + c) W / cw, per axis. docs/addon.md,
+    for u = x cw / W: t = 0.5 - (0.5 + c) W / cw, per axis. docs/frame-cost.md,
     *On 5.2: the Scale read-back placed*."""
     def axis(size: int, n: int) -> float:
         c = -0.5 if (n ^ size) & 1 else 0.0
@@ -842,7 +842,7 @@ def coarse_scale_offset(width: int, height: int) -> Tuple[float, float]:
     (host/nodes.scale_offset_places_read), so that frame pixel x reads the
     coarse canvas at texel x cw / W, as ``frame_scale`` reads it.
 
-    Measured there (docs/addon.md, *On 4.3: what a node costs, and how its
+    Measured there (docs/frame-cost.md, *On 4.3: what a node costs, and how its
     Scale reads*): with offsets (ox, oy) pixel (x, y) reads the texel
     coordinates u = (x + 0.5 - ox W) cw / W - 0.5 and v = (y + 0.5 - oy W)
     ch / H - 0.5, in one bilinear read. Solved for u = x cw / W and
