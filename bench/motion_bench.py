@@ -247,7 +247,7 @@ def run(size, frames, marches, backend="cpu", supersample=1, read_inside=True, s
             uv = glint_core.trace(P, N, proj, specular=S, back_position=B, backend=backend, **opts)
             if settle and opts.get("march") == "hiz":
                 # The add-on's composite settles the hits hiz was unsure of inside a
-                # reflection (docs/marches.md, *Uncertain shares inside a reflection*);
+                # reflection (docs/hiz.md, *Uncertain shares inside a reflection*);
                 # no hidden side here, so a hit takes its whole fade.
                 none = np.zeros_like(uv)
                 uv = glint_core.settle_uncertain_shares(uv, none, none)[0]

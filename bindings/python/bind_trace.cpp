@@ -254,7 +254,7 @@ void bind_trace(pyb::module_& m) {
       "the hits the march was unsure of settled from their neighbours where all eight report\n"
       "something within REUSE_PIXELS of the hit: the rest of the screen-edge fade goes to the\n"
       "hidden side beside it (hidden = (albedo x share / fade, share)) or else to the hit (vis =\n"
-      "fade). count: the pixels given a hidden share. docs/marches.md, *Uncertain shares inside a\n"
+      "fade). count: the pixels given a hidden share. docs/hiz.md, *Uncertain shares inside a\n"
       "reflection*.");
   m.def(
       "positive_bin_means",

@@ -1,6 +1,6 @@
 """A plain, slow float64 reference of the "hiz" march, without the pyramid.
 
-docs/marches.md defines what the march finds: walking the reflected ray's
+docs/hiz.md defines what the march finds: walking the reflected ray's
 screen-space line texel by texel from the texel after its origin, the first
 texel where the ray's depth span meets the texel's footprint range and the
 texel's tangent plane says Hit (the ray crosses it from the front, or is
@@ -407,7 +407,7 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     return "pass", ta
 
 
-# The reuse of rays at resolution <= 0.5 (docs/marches.md, "Reusing neighbours'
+# The reuse of rays at resolution <= 0.5 (docs/hiz.md, "Reusing neighbours'
 # rays"), written from that description: pixels with both coordinates even keep
 # their own ray's result; any other pixel takes its traced neighbours' common
 # miss, or the mean of their hits when those lie within 3 pixels of each other

@@ -191,7 +191,7 @@ def test_the_specular_buffer_is_required():
 
 
 def hidden_reference(uv, back_albedo):
-    """docs/marches.md, *Blocked rays*: an occluder entered by its hidden side
+    """docs/hiz.md, *Blocked rays*: an occluder entered by its hidden side
     (hit channel ENTERED_HIDDEN) whose texel has a back surface shows that
     surface's albedo, with its visibility in alpha; everything else is 0."""
     entered_hidden = glint_core.schema()["constants"]["ENTERED_HIDDEN"]
@@ -228,7 +228,7 @@ def test_hidden_sides_take_the_back_surfaces_albedo():
 
 
 def settle_reference(uv, hidden, back_albedo):
-    """docs/marches.md, *Uncertain shares inside a reflection*, pixel by pixel:
+    """docs/hiz.md, *Uncertain shares inside a reflection*, pixel by pixel:
     a hit under its screen-edge fade whose eight neighbours all report
     something within REUSE_PIXELS of its hit gives the rest of the fade to the
     hidden side when a neighbour entered one (and its hit's texel has a back

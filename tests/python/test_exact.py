@@ -157,7 +157,7 @@ def test_antialiased_outlines_follow_the_coverage(glint, name, make):
     """antialias=4 (the exact preset's) gives an outline pixel the share of its five rays
     that hit: against the exact coverage (16 sub-pixel rays, float64 render) the summed
     |visibility - coverage| over the reflecting pixels falls by more than half (89 -> 27
-    on the floor, 60 -> 30 on the corridor; docs/marches.md, *Antialiased outlines*)."""
+    on the floor, 60 -> 30 on the corridor; docs/hiz.md, *Antialiased outlines*)."""
     scene = make()
     gbuf = analytic.render(scene, W, H)
     coverage, whole = analytic.reflection_coverage(scene, gbuf, 15.0)

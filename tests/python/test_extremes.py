@@ -60,7 +60,7 @@ def check_pipeline(out, gb):
 
 # The marches as the extremes run them: each screen march with one ray a pixel,
 # and hiz with antialiased outlines too, as the presets that most users render
-# with trace (docs/marches.md, *Antialiased outlines*).
+# with trace (docs/hiz.md, *Antialiased outlines*).
 MARCH_RUNS = [dict(march=m) for m in SCREEN_MARCHES] + [dict(march="hiz", antialias=4)]
 
 

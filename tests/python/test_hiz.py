@@ -188,7 +188,7 @@ def test_the_back_layer_places_an_outline(name):
     edge past it: the correct hits (exact, visible, within 1.5 px) are almost never
     dimmed (the rule alone dimmed 1.1% and 3.1% of them here; the thickness's square as
     the line, 0.5% and 0.9%; the thickness itself, 0.04% and 0.14%), while the wrong
-    ones still are, a third of them or more (docs/marches.md, *Visibility*)."""
+    ones still are, a third of them or more (docs/hiz.md, *Visibility*)."""
     gb, mh, back = data(name, 160, 120)
     h, w = gb["object"].shape
     uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back,
@@ -209,7 +209,7 @@ def test_an_entered_occluder_is_a_hidden_hit():
     """An occluder whose ray lies deeper than half the texel's thickness behind the
     texel's own depth, or comes into it from behind, came in by the object's hidden
     side: with the back-face layer nearly all of those rays' exact mirror hits are
-    hidden from the camera (docs/marches.md, *Blocked rays*)."""
+    hidden from the camera (docs/hiz.md, *Blocked rays*)."""
     for name, w, h in (("floor", 160, 120), ("floor-shift", 160, 120)):
         gb, mh, back = data(name, w, h)
         uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"], back_position=back,
@@ -229,7 +229,7 @@ def test_an_entered_occluder_is_a_hidden_hit():
 def test_a_late_crossing_is_a_hit(name, recall):
     """With the back-face layer a ray found just behind a texel's front, that stays
     behind its plane to the texel's exit and was in front of the surface it came
-    from, is a crossing found late and reports a hit (docs/marches.md, *Late
+    from, is a crossing found late and reports a hit (docs/hiz.md, *Late
     crossings*). Before, blocked="miss" reported nothing there: recall was 0.971,
     0.968 and 0.980 on these scenes, precision 0.990-0.996."""
     gb, mh, back = data(name, 160, 120)
@@ -243,7 +243,7 @@ def test_a_late_crossing_is_a_hit(name, recall):
     assert score(plain, mh)[1] < r
 
 
-from reference_hiz import edge_fade  # noqa: E402  (docs/marches.md: the fade at the screen's edges)
+from reference_hiz import edge_fade  # noqa: E402  (docs/hiz.md: the fade at the screen's edges)
 
 
 @pytest.mark.parametrize("name", ["floor", "corridor", "wall"])
@@ -446,7 +446,7 @@ def test_antialiased_outlines_follow_the_coverage(name, resolution):
     the reflection's coverage of the pixel. Scored against the exact coverage, the share of
     16 sub-pixel rays (a 4x4 grid, float64 render) whose mirror hit is visible, the total
     error over the reflecting pixels falls by at least a fifth (by 27-32% on these scenes),
-    and as much on the pixels whose coverage is partial (by 27-40%) (docs/marches.md,
+    and as much on the pixels whose coverage is partial (by 27-40%) (docs/hiz.md,
     *Antialiased outlines*)."""
     sc = SCENES[name]()
     gb, _, back = data(name, 160, 120)
@@ -532,7 +532,7 @@ def test_rays_past_a_convex_edge_report_nothing(degrees, backend, blocked, reque
     """At a convex crease the surface between two texels' centres is the farther of
     their planes: a ray from the front face that crosses the top face's plane
     extended below the edge (or is behind it when it enters the edge texel) is still
-    in front of the front face there, and passes (docs/marches.md, *Convex creases*).
+    in front of the front face there, and passes (docs/hiz.md, *Convex creases*).
     Taking the edge texel's plane alone reported 37 of 270 front pixels at 40x30 and
     54 of 1090 at 80x60 (50 degrees, occluders shown) as hits or occluders."""
     if backend == "gl":
@@ -556,7 +556,7 @@ def test_the_fade_looks_at_the_edge_the_ray_heads_for(name):
     at. A hit near an edge its ray runs along or away from (the floor's reflection of
     something at the frame's side: the frame cuts the reflector and the object there
     already) keeps its full visibility; one whose ray heads into the edge fades
-    (docs/marches.md, *Visibility*). The old rule, the nearest edge whatever the
+    (docs/hiz.md, *Visibility*). The old rule, the nearest edge whatever the
     direction, dimmed every one of these correct hits."""
     gb, mh, _ = data(name, 160, 120)
     uv = glint_core.trace(gb["position"], gb["normal"], gb["projection"],

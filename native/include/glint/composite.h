@@ -86,7 +86,7 @@ void read_inside_outlines(Image& uv, const Image& position, const Image* back_po
 Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& count, int threads = 0);
 
 // What the hiz march was unsure of, settled from the pixel's neighbours
-// (docs/marches.md, *Uncertain shares inside a reflection*). A hit with
+// (docs/hiz.md, *Uncertain shares inside a reflection*). A hit with
 // visibility under its screen-edge fade (an outline texel's confidence: the
 // ray may have passed beside the object there) whose eight neighbours all
 // report something within hiz::kReusePixels of its hit lies inside its

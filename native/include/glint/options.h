@@ -42,7 +42,7 @@ enum class BlurMode {
 
 // What the hiz march reports for a ray that is blocked: one that meets a
 // surface inside its thickness, so that what it would hit is hidden behind it
-// (docs/marches.md, "Blocked rays").
+// (docs/hiz.md, "Blocked rays").
 enum class Blocked {
   Miss,      // nothing: (0, 0, 0, 0), the accuracy contract's answer (default)
   Occluder,  // (u, v, weight, 0) at the occluder: the colour stages show what

@@ -82,7 +82,7 @@ constexpr float kUncertain = 0.5f;
 // only where the frame cuts the reflector and the reflected object already,
 // so fading there dimmed true reflections for nothing (an object at the
 // frame's side, reflected in the floor under it). A hit on the pixel itself
-// (no direction) fades by its nearest edge. docs/marches.md, *Visibility*.
+// (no direction) fades by its nearest edge. docs/hiz.md, *Visibility*.
 inline float screen_edge_fade(float ou, float ov, float u, float v) {
   const float du = u - ou, dv = v - ov;
   const float mu = du > 0.0f ? 1.0f - u : u;  // to the edge each axis heads for
@@ -103,7 +103,7 @@ inline float pixel_edge_fade(int x, int y, int w, int h, float u, float v) {
 // blocked="occluder": the fourth channel (the hit's own visibility) of a ray
 // that came into an object by the side the camera does not see (its back
 // layer's surface) is this, where an occluder found a texel late has 0
-// (docs/marches.md, *Blocked rays*).
+// (docs/hiz.md, *Blocked rays*).
 constexpr float kEnteredHidden = -1.0f;
 // An occluder's report is a hidden entry when, inside the texel's thickness,
 // the ray lies deeper behind the texel's own depth (flat, not along its
@@ -126,13 +126,13 @@ constexpr float kReusePixels = 3.0f;
 // view distance): a mirror stretches what it reflects, and between hits on
 // one plane the mean uv is where the pixel's own ray goes, up to the
 // projection's curvature. 8 pixels lost a few hits by 1.5-3 px near the
-// corridor's horizon; 6 lost none (docs/marches.md, *Reusing neighbours' rays*).
+// corridor's horizon; 6 lost none (docs/hiz.md, *Reusing neighbours' rays*).
 constexpr float kReuseSpanPixels = 6.0f;
 // ... and only when their visibilities lie within this of each other: a step
 // in confidence between them is an outline (one hit on an object's rim), which
 // the pixel's own ray places better than a mean does.
 constexpr float kReuseSpanVisibility = 0.1f;
-// Antialiased outlines (docs/marches.md): a pixel whose hit meets a miss
+// Antialiased outlines (docs/hiz.md): a pixel whose hit meets a miss
 // beside it on the same surface also traces rays at these offsets from its
 // centre, in pixels: the rotated grid (-n, -f), (f, -n), (n, f), (-f, n),
 // whose four samples fall in four different rows and columns of a 4x4 grid,
@@ -252,7 +252,7 @@ inline constexpr Option thickness{"thickness", Type::Float, 0.5, nullptr, 0.0, 1
                                   "how far behind a surface still counts as a hit"};
 inline constexpr Option march{"march", Type::Name, 0, "seed", 0, 0, "", nullptr,
                               "how rays are marched: a name from the table of marches"};
-// Samples a hiz pixel adds where its hit meets a miss beside it (docs/marches.md,
+// Samples a hiz pixel adds where its hit meets a miss beside it (docs/hiz.md,
 // *Antialiased outlines*): 0 is one ray per pixel, 4 the rotated grid.
 inline constexpr Option antialias{"antialias", Type::Int, 0, nullptr, 0, 4, "rays per pixel", nullptr,
                                   "hiz: extra rays inside a pixel on a reflection's outline, 0 = one ray per pixel"};

@@ -1,7 +1,7 @@
 // The "hiz" march's pyramid on the CPU (its walk is hiz_walk.h's), and its
 // entry points on both backends. The GL backend runs the same steps in
 // hiz_base.frag, hiz_reduce.frag and trace_hiz.frag (gl_passes.cpp);
-// docs/marches.md explains the method.
+// docs/hiz.md explains the method.
 #pragma once
 #include <cstddef>
 #include <vector>
@@ -17,7 +17,7 @@ namespace glint {
 
 // The hiz march at resolution <= kHizReuseResolution traces every other pixel
 // of every other row first, and each other pixel only where those traced
-// around it disagree (docs/marches.md, "Reusing neighbours' rays"). Both
+// around it disagree (docs/hiz.md, "Reusing neighbours' rays"). Both
 // backends decide by this.
 constexpr float kHizReuseResolution = hiz::kReuseResolution;
 inline bool hiz_reuses_rays(const TraceOptions& o) {
@@ -107,7 +107,7 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
                              const HizCamera& cam, float thickness, int threads, HizPlanes& planes,
                              WalkIsa isa);
 
-// With `resolution` <= 0.5 a trace reuses rays (docs/marches.md): the pixels
+// With `resolution` <= 0.5 a trace reuses rays (docs/hiz.md): the pixels
 // it does not trace first take their neighbours' answers where those lie on
 // their surface and agree. The surface half of that test for every pixel of
 // row y, a byte each (1: the pixel has a ray and its traced neighbours lie on

@@ -1,5 +1,5 @@
 // The hiz march's antialiased outlines (native/src/cpu/outline.cpp and
-// march_hiz.cpp on the CPU; docs/marches.md), what their passes share. hiz_outline_find.comp lists the pixels
+// march_hiz.cpp on the CPU; docs/hiz.md), what their passes share. hiz_outline_find.comp lists the pixels
 // on a reflection's outline; hiz_outline_args.comp sizes the two dispatches
 // of each batch; hiz_outline_trace.comp writes the reports of their extra
 // rays (u_per_pixel per listed pixel) and hiz_outline_resolve.comp filters

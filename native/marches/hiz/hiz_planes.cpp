@@ -1,5 +1,5 @@
 // The hiz march's plane normals: each texel's geometric normal rebuilt from
-// the position buffer (hiz.h says the rule, docs/marches.md why). The GL
+// the position buffer (hiz.h says the rule, docs/hiz.md why). The GL
 // backend runs the same steps in hiz_planes.glsl (from hiz_base.frag), in the same order.
 #include <cmath>
 

@@ -1,4 +1,4 @@
-// The hiz march's walk through the pyramid (docs/marches.md, "The walk").
+// The hiz march's walk through the pyramid (docs/hiz.md, "The walk").
 // march_hiz.cpp makes each ray and tests the level-0 texels the walk stops
 // at; the walk is the part in between, where a ray spends nearly all of its
 // steps. One ray is a chain of ~25 dependent steps of a few dozen

@@ -1,5 +1,5 @@
 // The "hiz" march: a min/max depth pyramid walked cell by cell along the
-// reflected ray's screen-space line (docs/marches.md has the derivation).
+// reflected ray's screen-space line (docs/hiz.md has the derivation).
 //
 // Why not the seed's point samples: a sample tests one point of the ray
 // against one texel, so a grazing ray that crosses more than `thickness` of
@@ -345,7 +345,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
     // behind thin things), the ray stays behind the plane to the texel's exit
     // (one that comes back out in front grazed an edge), and it was in front
     // of the surface of the texel it came from (behind it, it came from behind
-    // things). docs/marches.md, *Late crossings*.
+    // things). docs/hiz.md, *Late crossings*.
     if (b_behind && known_thickness(position, back, i, j) > 0.0f && in_front_before(position, planes, r, i, j, ta)) {
       located = true;
       return TexelOutcome::Hit;
@@ -365,7 +365,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
 // centre toward such a neighbour is on the object with probability 1 - d:
 // 1 on the inner half, falling to kUncertain at the texel's outer edge.
 //
-// The back-face layer can place the edge (docs/marches.md, *Visibility*): a
+// The back-face layer can place the edge (docs/hiz.md, *Visibility*): a
 // closed object's thickness along the view ray falls to 0 at its outline.
 // A mesh's outline runs along edges where a front and a back face meet, a
 // wedge, across which the thickness falls linearly: extrapolated from the
@@ -503,7 +503,7 @@ bool queue_texel(void* ctx, int lane, int i, int j, float ta, float tb) {
   float* out = q.dst[lane];
   if (hit == TexelOutcome::Blocked || hit == TexelOutcome::Entered) {
     // What hides the hit: the colour stages may show it in place of the
-    // sky (docs/marches.md, "Blocked rays"). The texel's centre, not where
+    // sky (docs/hiz.md, "Blocked rays"). The texel's centre, not where
     // the ray entered it: a bilinear read on its edge would mix in the
     // texel beside it, often another object.
     if (q.s.opt.blocked != Blocked::Occluder) return false;
@@ -685,7 +685,7 @@ int reuse_neighbours_of(int x, int y, int q[4][2]) {
 }
 
 // Whether the traced neighbours of pixel (x, y) (reuse_neighbours_of()) say
-// what its own ray would find (docs/marches.md, "Reusing neighbours' rays").
+// what its own ray would find (docs/hiz.md, "Reusing neighbours' rays").
 // It takes two halves: reuse_surface() reads only the G-buffer, so a row's
 // answers can be had in one sweep (eight pixels at a time on AVX2), and
 // reuse_reports() reads the first pass's reports for the pixels that pass.
@@ -773,7 +773,7 @@ bool reuse_reports(const TraceInputs& in, const Image& out, int x, int y, float 
   return true;
 }
 
-// --- Antialiased outlines (docs/marches.md) --------------------------------
+// --- Antialiased outlines (docs/hiz.md) --------------------------------
 
 // The ray of pixel (x, y) from offset (ox, oy) pixels off its centre: from
 // where the view ray through that point meets the texel's tangent plane,
