@@ -206,7 +206,29 @@ def _screenshots(tag):
                 result["errors"].append(f"screenshot {w}: {exc}")
 
 
+class _WritesRefused(Exception):
+    """Blender refused to let Python write to the scene for now."""
+
+
+def _writes_allowed():
+    """Whether Python may write to ID data at this moment. Blender forbids it
+    while a read-only Python callback runs (a panel's draw, a Python render
+    engine's method such as Cycles'), and the flag is the whole process's: a
+    timer on the main thread can meet it raised by Cycles on the render thread
+    just after a render ("Writing to ID classes in this context is not
+    allowed"). Tried with a write of the value already there."""
+    try:
+        r.image_settings.file_format = r.image_settings.file_format
+    except AttributeError as exc:
+        if "not allowed" in str(exc):
+            return False
+        raise
+    return True
+
+
 def _collect(i, step):
+    if not _writes_allowed():
+        raise _WritesRefused()
     cur = _current()
     cur["glint"] = _glint_status()
     cur["job_running"] = bpy.app.is_job_running("RENDER")
@@ -216,13 +238,16 @@ def _collect(i, step):
     cur["has_render_result"] = img is not None
     if img is not None:
         fmt = (r.image_settings.file_format, r.image_settings.color_depth)
-        for name, file_format, depth in ((f"render_{i}.exr", "OPEN_EXR", "32"), (f"render_{i}.png", "PNG", "8")):
-            r.image_settings.file_format, r.image_settings.color_depth = file_format, depth
-            try:
-                img.save_render(os.path.join(OUT, name), scene=scene)
-            except Exception as exc:
-                result["errors"].append(f"save_render {name}: {exc}")
-        r.image_settings.file_format, r.image_settings.color_depth = fmt
+        try:
+            for name, file_format, depth in ((f"render_{i}.exr", "OPEN_EXR", "32"),
+                                             (f"render_{i}.png", "PNG", "8")):
+                r.image_settings.file_format, r.image_settings.color_depth = file_format, depth
+                try:
+                    img.save_render(os.path.join(OUT, name), scene=scene)
+                except Exception as exc:
+                    result["errors"].append(f"save_render {name}: {exc}")
+        finally:
+            r.image_settings.file_format, r.image_settings.color_depth = fmt
 
 
 def _finish():
@@ -314,7 +339,13 @@ def _tick():
         # A few redraws of the render window and the panel before looking at them.
         if time.monotonic() - state["settle"] < 0.6:
             return 0.1
-        _collect(i, RENDERS[i])
+        try:
+            _collect(i, RENDERS[i])
+        except _WritesRefused:
+            if time.monotonic() - state["settle"] > 30:
+                raise RuntimeError("Blender refused writes to the scene for 30 s after the render") from None
+            _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
+            return 0.1
         if SHOTS:
             _screenshots(str(i))
         state["index"] = i + 1
