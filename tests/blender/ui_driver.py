@@ -206,10 +206,6 @@ def _screenshots(tag):
                 result["errors"].append(f"screenshot {w}: {exc}")
 
 
-class _WritesRefused(Exception):
-    """Blender refused to let Python write to the scene for now."""
-
-
 def _writes_allowed():
     """Whether Python may write to ID data at this moment. Blender forbids it
     while a read-only Python callback runs (a panel's draw, a Python render
@@ -227,8 +223,6 @@ def _writes_allowed():
 
 
 def _collect(i, step):
-    if not _writes_allowed():
-        raise _WritesRefused()
     cur = _current()
     cur["glint"] = _glint_status()
     cur["job_running"] = bpy.app.is_job_running("RENDER")
@@ -339,13 +333,12 @@ def _tick():
         # A few redraws of the render window and the panel before looking at them.
         if time.monotonic() - state["settle"] < 0.6:
             return 0.1
-        try:
-            _collect(i, RENDERS[i])
-        except _WritesRefused:
+        if not _writes_allowed():  # _collect sets the image format to save the frame
             if time.monotonic() - state["settle"] > 30:
-                raise RuntimeError("Blender refused writes to the scene for 30 s after the render") from None
+                raise RuntimeError("Blender refused writes to the scene for 30 s after the render")
             _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
             return 0.1
+        _collect(i, RENDERS[i])
         if SHOTS:
             _screenshots(str(i))
         state["index"] = i + 1
