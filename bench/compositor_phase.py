@@ -30,7 +30,9 @@ import frame_bench as fb  # noqa: E402
 # name -> (execution mode, node of the group muted or None, Fill Hidden Reflections)
 VARIANTS = {"Tiled": ("TILED", None, True), "Full Frame": ("FULL_FRAME", None, True),
             "Tiled Map UV muted": ("TILED", "map_uv", True),
-            "Tiled no hidden sides": ("TILED", None, False)}
+            "Tiled no hidden sides": ("TILED", None, False),
+            # rep x S taken out whole, not at most the frame (a muted Darken passes it through)
+            "Tiled unbounded": ("TILED", "taken_out", True)}
 
 
 def main():

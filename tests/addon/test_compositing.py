@@ -79,8 +79,8 @@ def test_the_soften_level_is_the_3x3_binomial_kernel():
 # -- an independent reference of the composite (sampling and blur: compositing_reference.py)
 
 def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidden=None, past_edge="zero"):
-    """out = base + R, R = D at the pixel's lod between Gaussian levels of D,
-    D = C W - rep S: written from the formula, not from the node list. With
+    """out = max(base + R, 0), R = D at the pixel's lod between Gaussian levels of
+    D, D = C W - min(rep S, base): written from the formula, not from the node list. With
     ``bounce``, C is sampled from the frame with its first bounce, base + D.
     ``hidden`` (albedo, vis): those pixels (vis 0 in ``uv``) show albedo x the
     frame at the pixel, times their vis, and replace that share of S.
@@ -88,16 +88,18 @@ def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidd
     vis = uv[..., 2:3]
     rep = vis if hidden is None else vis + hidden[..., 3:4]
     own = 0.0 if hidden is None else hidden[..., :3] * hidden[..., 3:4] * base[..., :3]
+    # what is taken out: the engine's specular where a hit replaces it, at most the frame
+    out_of_frame = np.minimum(rep * (light[..., :3] * colour[..., :3]), base[..., :3])
     C = np.where(vis > 0, bilinear_clamp(base, uv[..., 0], uv[..., 1]) * vis, 0.0)
-    D = (C[..., :3] + own) * weight[..., :3] - rep * (light[..., :3] * colour[..., :3])
+    D = (C[..., :3] + own) * weight[..., :3] - out_of_frame
     if bounce:
         first = base.copy()
         first[..., :3] += D
         C = np.where(vis > 0, bilinear_clamp(first, uv[..., 0], uv[..., 1]) * vis, 0.0)
-        D = (C[..., :3] + own) * weight[..., :3] - rep * (light[..., :3] * colour[..., :3])
+        D = (C[..., :3] + own) * weight[..., :3] - out_of_frame
     R = blurred_at_lod(D, lod, past_edge=past_edge)
     out = base.copy()
-    out[..., :3] += R
+    out[..., :3] = np.maximum(out[..., :3] + R, 0.0)  # no pixel below 0
     return out, R
 
 
@@ -291,9 +293,31 @@ def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
                             specular_light=light, specular_color=colour)["Image"]
     hit = uv[..., 2] > 0
     C = np_map_uv(base, uv_image(uv))
-    want = base[..., :3] + C[..., :3] * weight[..., :3] - uv[..., 2:3] * light[..., :3] * colour[..., :3]
+    S = uv[..., 2:3] * light[..., :3] * colour[..., :3]
+    # the core's combine with a specular base (glint_core.combine): at most the frame taken out
+    want = np.maximum(base[..., :3] - S, 0.0) + C[..., :3] * weight[..., :3]
     assert np.allclose(out[hit, :3], want[hit], atol=ATOL)
     assert np.array_equal(out[~hit], base[~hit])
+    # the engine's specular exceeds the frame on some hits: those show the reflection alone, never less
+    short = hit[..., None] & (S > base[..., :3])
+    assert short.sum() > 10
+    assert np.allclose(out[..., :3][short], (C[..., :3] * weight[..., :3])[short], atol=ATOL)
+    assert out[..., :3].min() >= 0.0
+
+
+@pytest.mark.parametrize("world", [False, True])
+def test_no_pixel_goes_below_0_where_the_engine_specular_exceeds_the_frame(world):
+    """S up to twice the frame's white, on blurred pixels: the bound before the blur
+    and the floor after it leave every channel at 0 or above."""
+    base, position, spec, uv, seen, weight, lod, light, colour = scene(seed=17)
+    base[..., :3] *= 0.2  # a dark frame, which the engine's specular exceeds on most hits
+    kw = dict(specular_light=light, specular_color=colour)
+    if world:
+        kw = dict(specular_light=light[0, 0], specular_color=weight, world_specular=True)
+    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+                            **kw)
+    assert (out["Reflection"][..., :3] < -0.05).any()  # the frame does darken
+    assert out["Image"][..., :3].min() >= 0.0
 
 
 def test_without_rough_surfaces_the_levels_are_switched_off():

@@ -31,23 +31,40 @@ and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
                                                         hidden side lit by what
                                                         reflects it (below)
     S   = Specular Light * Specular Color               the engine's own specular
-    D   = C * W - rep * S                               what changes: the engine's
+    D   = C * W - min(rep * S, frame)                   what changes: the engine's
                                                         specular out where a hit
-                                                        replaces it, the reflection in
+                                                        replaces it, at most the
+                                                        frame, the reflection in
     D2  = D + W * vis * D(u, v)                         the second bounce (below)
     R   = D2 blurred at the pixel's lod                 (rough surfaces only)
-    out = frame + R
+    out = max(frame + R, 0)                             no pixel below 0
 
 Replace, not add: where the trace found the reflection (vis 1) the engine's
 specular of the world is taken out and the reflection put in; where it found
 nothing (vis 0), D = 0 and the pixel is exactly the engine's. Under Eevee and
 a uniform world the group's two inputs are the world's colour and the weight
 image instead of the passes (S = colour x W, logic/world.py), and the group
-takes D = W (C - vis colour) there (``use_passes`` off): the same D in two
-nodes instead of eight, each of which the compositor runs on every pixel.
+makes S from them (``use_passes`` off): one node instead of seven, each of
+which the compositor runs on every pixel.
 Engines without
 those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
+
+At most the frame: frame + D = max(frame - rep * S, 0) + C * W per channel,
+the core's combine with a specular base (docs/look-core.md). The S taken out
+is a model of what the engine put in, and where the engine put in less (Eevee
+Legacy's ambient occlusion darkens its specular; a metal's frame holds nothing
+else) taking out the whole of it left the pixel below the reflection alone,
+or below 0: a black band under a metal sphere, negative values in a written
+EXR. The frame is the most the engine's specular can have been. C is read
+once: the minimum is taken of what leaves, not of D and C * W - frame, which
+would run Map UV twice in a compositor that makes a node's output again for
+each reader (3.4's, docs/frame-cost.md). The blur
+then spreads each pixel's D over its neighbours, whose frames may hold less,
+so the frame + R is held at 0 or above after it. That is one node on the
+frame's canvas (a Mix Lighten with black), cheaper than max(R, -frame) on the
+region, which takes three; it would also raise a negative pixel of the
+engine's own to 0, which no engine Glint composites on renders.
 
 The blur: :data:`BLUR_LEVELS` Gaussian levels of D (the first Blender's 3x3
 Soften filter after 4.1 and its Blur node's sampled Gaussian before, both of
@@ -355,12 +372,17 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "finite_g": _math("MAXIMUM", False, {1: 0.0}),
     "finite_b": _math("MAXIMUM", False, {1: 0.0}),
     "finite_specular": ("combine", {}, {3: 1.0}),
-    "delta": _mix("SUBTRACT"),                      # C * W - rep * S
-    # Under a uniform world S = colour x W: D = W (C - vis colour), two nodes
-    # where the passes' path takes eight (the compositor runs each on every pixel).
-    "world_replaced": _mix("SUBTRACT"),             # C - rep * colour
-    "world_delta": _mix("MULTIPLY", {0: 1.0}),      # W (C - rep * colour)
+    # Under a uniform world S = colour x W, two nodes fewer than the passes'
+    # path (the compositor runs each on every pixel of its canvas).
+    "world_specular": _mix("MULTIPLY", {0: 1.0}),    # W * colour
     "use_passes": ("switch", {"on": True}, {}),
+    # What is taken out: rep * S, at most the frame (see "At most the frame"
+    # above), the frame read on the region's pixels. Each operation's first
+    # image input is region-sized, so the region sizes it; C is read once.
+    "replaced_specular": _mix("MULTIPLY", {0: 1.0}),  # rep * S
+    "frame_to_region": _translate(-1),
+    "taken_out": _mix("DARKEN", {0: 1.0}),             # min(rep * S, frame)
+    "delta": _mix("SUBTRACT", {0: 1.0}),               # D = C * W - min(rep * S, frame)
     # D made once where the compositor would make it again for each node that
     # reads it (3.x-4.1's Tiled compositor: the first level's blur, the coarse
     # canvas's Map UV, the first mix and, with the bounce, its source each
@@ -373,6 +395,8 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "use_bounce": ("switch", {"on": False}, {}),
     "use_blur": ("switch", {"on": True}, {}),
     "combined": _mix("ADD", {0: 1.0}),              # frame + R
+    # no pixel below 0 after the blur (see "At most the frame" above)
+    "non_negative": _mix("LIGHTEN", {0: 1.0, 2: (0.0, 0.0, 0.0, 1.0)}),
     "show_reflection": ("switch", {"on": False}, {}),
     "show_debug": ("switch", {"on": False}, {}),
 }
@@ -469,25 +493,25 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("finite_r", 0, "finite_specular", 0),
     ("finite_g", 0, "finite_specular", 1),
     ("finite_b", 0, "finite_specular", 2),
-    # the passes' path: the frame-sized S is read on the region (C * W first,
-    # so the region sizes the operation)
+    # the passes' path: the frame-sized S, moved so that the region-sized
+    # operation that takes it reads the region's pixels
     ("finite_specular", 0, "specular_to_region", 0),
-    ("sep_uv", 3, "delta", 0),
+    ("specular_to_region", 0, "use_passes", 1),
+    # the world's path; input 0 when off, the passes' nodes not run
+    ("weight_image", 0, "world_specular", 1),
+    (GROUP_IN, 1, "world_specular", 2),
+    ("world_specular", 0, "use_passes", 0),
+    ("sep_uv", 3, "replaced_specular", 1),
+    ("use_passes", 0, "replaced_specular", 2),
+    (GROUP_IN, 0, "frame_to_region", 0),
+    ("replaced_specular", 0, "taken_out", 1),
+    ("frame_to_region", 0, "taken_out", 2),
     ("weighted", 0, "delta", 1),
-    ("specular_to_region", 0, "delta", 2),
-    # the world's path
-    ("sep_uv", 3, "world_replaced", 0),
-    ("use_hidden", 0, "world_replaced", 1),
-    (GROUP_IN, 1, "world_replaced", 2),
-    ("world_replaced", 0, "world_delta", 1),
-    ("weight_image", 0, "world_delta", 2),
-    # input 0 when off: the world's path, the passes' nodes not run
-    ("world_delta", 0, "use_passes", 0),
+    ("taken_out", 0, "delta", 2),
     # input 0 when off: D as it is; on: D made once (d_kept)
-    ("use_passes", 0, "d_kept", 0),
-    ("use_passes", 0, "d_buffered", 0),
+    ("delta", 0, "d_kept", 0),
+    ("delta", 0, "d_buffered", 0),
     ("d_kept", 0, "d_buffered", 1),
-    ("delta", 0, "use_passes", 1),
     ("d_buffered", 0, "delta_to_frame", 0),
     (GROUP_IN, 0, "bounce_source", 1),
     ("delta_to_frame", 0, "bounce_source", 2),
@@ -574,7 +598,8 @@ GROUP_LINKS += [
     (GROUP_IN, 0, "combined", 1),
     ("reflection_to_frame", 0, "combined", 2),
     # output switches: composited / reflection / G-buffer debug image
-    ("combined", 0, "show_reflection", 0),
+    ("combined", 0, "non_negative", 1),
+    ("non_negative", 0, "show_reflection", 0),
     ("reflection_to_frame", 0, "show_reflection", 1),
     ("show_reflection", 0, "show_debug", 0),
     ("debug_image", 0, "show_debug", 1),
@@ -977,6 +1002,9 @@ def _blend(props, fac, c1, c2):
         out[..., :3] = c1[..., :3] + fac * c2[..., :3]
     elif mode == "SUBTRACT":
         out[..., :3] = c1[..., :3] - fac * c2[..., :3]
+    elif mode in ("LIGHTEN", "DARKEN"):  # 4.x-5.x's rule; 3.4's, max(c1, fac * c2), is the same at factor 1
+        pick = np.maximum if mode == "LIGHTEN" else np.minimum
+        out[..., :3] = (1.0 - fac) * c1[..., :3] + fac * pick(c1[..., :3], c2[..., :3])
     else:
         raise ValueError(f"blend {mode!r} is not modelled")
     return out.astype(np.float32)
