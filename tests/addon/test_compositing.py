@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from compositing_reference import bilinear_clamp, bilinear_zero, blurred_at_lod, gauss_clamp
+import group_model as gm
 from glint_addon_helpers import load_logic
 
 cg = load_logic("compositing")
@@ -67,13 +68,13 @@ def test_the_soften_level_is_the_3x3_binomial_kernel():
     impulse spreads to (1 2 1; 2 4 2; 1 2 1) / 16, the edge texel repeated."""
     img = np.zeros((5, 6, 4), np.float32)
     img[2, 3] = 16.0
-    out = cg._softened(img)
+    out = gm._softened(img)
     want = np.zeros((5, 6), np.float32)
     want[1:4, 2:5] = [[1, 2, 1], [2, 4, 2], [1, 2, 1]]
     assert np.array_equal(out[..., 0], want) and np.array_equal(out[..., 3], want)
     corner = np.zeros((3, 3, 4), np.float32)
     corner[0, 0] = 16.0  # clamped: the corner texel weighs (1 + 2) / 4 along each axis
-    assert cg._softened(corner)[0, 0, 0] == pytest.approx(9.0)
+    assert gm._softened(corner)[0, 0, 0] == pytest.approx(9.0)
 
 
 # -- an independent reference of the composite (sampling and blur: compositing_reference.py)
@@ -158,7 +159,7 @@ def images_of(base, position, spec, uv, weight, lod, debug=None, hidden=None):
 def test_group_computes_the_composite(engine_passes):
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     kw = dict(specular_light=light, specular_color=colour) if engine_passes else {}
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
     if not engine_passes:  # an unlinked input is black: nothing replaced, the reflection added
         light = colour = np.zeros_like(base)
     want, R = reference_composite(base, uv, weight, lod, light, colour)
@@ -198,13 +199,13 @@ def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bou
     else:
         kw = dict(specular_light=light, specular_color=colour)
     kw["whole_frame"] = whole_frame
-    out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
+    out = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
     edge = "clamp" if whole_frame else "zero"  # the fine image's Map UV, or the Scale
     want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden,
                                   past_edge=edge)
     assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
     # switched off, the hidden image is not read: the pixels only lose S
-    off = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, **kw)
+    off = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, **kw)
     hidden_off = hidden.copy()
     hidden_off[..., :3] = 0
     want_off, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden_off,
@@ -217,7 +218,7 @@ def test_a_cleared_uv_image_passes_the_frame_through_whatever_the_hidden_image_h
     uv, hidden = with_hidden_sides(uv)
     images = images_of(base, position, spec, np.zeros_like(uv), weight, lod, hidden=hidden)
     images[cg.IMAGE_UV] = np.zeros_like(uv)  # clear_images(only_pass_through=True)
-    out = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, specular_light=light, specular_color=colour,
+    out = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, specular_light=light, specular_color=colour,
                             use_hidden=True)
     assert np.array_equal(out["Image"], base)
 
@@ -226,7 +227,7 @@ def test_a_cleared_uv_image_passes_the_frame_through_whatever_the_hidden_image_h
 def test_second_bounce_samples_the_frame_with_its_first(engine_passes):
     base, position, spec, uv, seen, weight, lod, light, colour = scene(seed=11)
     kw = dict(specular_light=light, specular_color=colour) if engine_passes else {}
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
                             use_bounce=True, **kw)
     if not engine_passes:
         light = colour = np.zeros_like(base)
@@ -264,7 +265,7 @@ def test_second_bounce_runs_where_reflectors_can_meet():
     calls = []
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     images = images_of(base, position, spec, uv, weight, lod)
-    cg.evaluate_group(base, images, lambda i, u: calls.append(1) or np_map_uv(i, u), gauss_clamp, use_blur=False)
+    gm.evaluate_group(base, images, lambda i, u: calls.append(1) or np_map_uv(i, u), gauss_clamp, use_blur=False)
     assert len(calls) == 1  # switched off, the second Map UV does not run (nor the coarse levels' two)
 
 
@@ -276,9 +277,9 @@ def test_the_world_path_is_the_passes_path_with_s_the_world_colour_times_w(bounc
     world = np.broadcast_to(np.array((0.3, 0.35, 0.45, 1.0), np.float32), base.shape)
     w_image = images_of(base, position, spec, uv, weight, lod)[cg.IMAGE_WEIGHT]
     kw = dict(specular_light=world, specular_color=w_image, use_bounce=bounce)
-    short = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv,
+    short = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv,
                               gauss_clamp, world_specular=True, **kw)
-    full = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
+    full = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
     want, _ = reference_composite(base, uv, weight, lod, world, w_image, bounce=bounce)
     assert np.allclose(short["Image"][..., :3], want[..., :3], atol=ATOL)
     assert np.allclose(full["Image"][..., :3], want[..., :3], atol=ATOL)
@@ -289,7 +290,7 @@ def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
     """vis 1, lod 0: the pixel's engine specular S leaves, the reflection C W comes in."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     lod[:] = 0
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
                             specular_light=light, specular_color=colour)["Image"]
     hit = uv[..., 2] > 0
     C = np_map_uv(base, uv_image(uv))
@@ -314,7 +315,7 @@ def test_no_pixel_goes_below_0_where_the_engine_specular_exceeds_the_frame(world
     kw = dict(specular_light=light, specular_color=colour)
     if world:
         kw = dict(specular_light=light[0, 0], specular_color=weight, world_specular=True)
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
                             **kw)
     assert (out["Reflection"][..., :3] < -0.05).any()  # the frame does darken
     assert out["Image"][..., :3].min() >= 0.0
@@ -325,8 +326,8 @@ def test_without_rough_surfaces_the_levels_are_switched_off():
     lod[:] = 0  # every pixel sharp: the levels would pick D anyway
     calls = []
     images = images_of(base, position, spec, uv, weight, lod)
-    on = cg.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s))
-    off = cg.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s),
+    on = gm.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s))
+    off = gm.evaluate_group(base, images, np_map_uv, lambda i, s: calls.append(s) or gauss_clamp(i, s),
                             use_blur=False)
     assert len(calls) == len(cg.BLUR_LEVELS) - 1  # only the first evaluation blurred (level 1 is the 3x3 filter)
     assert np.allclose(on["Image"], off["Image"], atol=1e-6)
@@ -340,7 +341,7 @@ def test_nan_engine_specular_where_nothing_reflects_stays_out_of_the_frame():
     miss = uv[..., 2] == 0
     light[miss] = np.nan
     colour[miss] = 0
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
                             specular_light=light, specular_color=colour)
     assert np.isfinite(out["Image"]).all()
     assert np.array_equal(out["Image"][miss], base[miss])
@@ -351,7 +352,7 @@ def test_nothing_reflective_leaves_the_base_bit_exact():
     spec[..., :3] = 0
     uv[:] = 0
     weight[:] = 0
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod * 0), np_map_uv, gauss_clamp,
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod * 0), np_map_uv, gauss_clamp,
                             specular_light=light, specular_color=colour)
     assert np.array_equal(out["Image"], base)
 
@@ -360,10 +361,10 @@ def test_debug_switches():
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     dbg = np.full_like(base, 0.25)
     images = images_of(base, position, spec, uv, weight, lod, debug=dbg)
-    refl = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, debug_view="REFLECTION")
+    refl = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, debug_view="REFLECTION")
     assert np.array_equal(refl["Image"], refl["Reflection"])
     for view in cg.GBUFFER_DEBUG_VIEWS:
-        assert np.array_equal(cg.evaluate_group(base, images, np_map_uv, gauss_clamp,
+        assert np.array_equal(gm.evaluate_group(base, images, np_map_uv, gauss_clamp,
                                                 debug_view=view)["Image"], dbg)
     assert cg.switch_states("NONE", False) == {"show_reflection": False, "show_debug": False, "use_blur": False,
                                                "use_bounce": False, "use_passes": True, "use_hidden": False,
@@ -379,20 +380,20 @@ def test_the_muted_nodes_are_exactly_those_no_output_reads(monkeypatch):
     base, position, spec, uv, seen, weight, lod, light, colour = scene(h=6, w=8)
     images = images_of(base, position, spec, uv, weight, lod)
     read = set()
-    node_output = cg._node_output
+    node_output = gm._node_output
 
     def recording(node, *args, **kwargs):
         read.add(node)
         return node_output(node, *args, **kwargs)
 
-    monkeypatch.setattr(cg, "_node_output", recording)
+    monkeypatch.setattr(gm, "_node_output", recording)
     switches = {name for name, (kind, _, _) in cg.GROUP_NODES.items() if kind == "switch"}
     flags = ("use_blur", "use_bounce", "world_specular", "use_hidden", "soften_filters", "whole_frame")
     for view in [v for v, _, _ in cg.DEBUG_VIEWS]:
         for bits in range(1 << len(flags)):
             kw = {name: bool(bits >> i & 1) for i, name in enumerate(flags)}
             read.clear()
-            cg.evaluate_group(base, images, np_map_uv, gauss_clamp, debug_view=view, **kw)
+            gm.evaluate_group(base, images, np_map_uv, gauss_clamp, debug_view=view, **kw)
             dead = cg.dead_nodes(cg.switch_states(view, *(kw[name] for name in flags)))
             assert read - switches == set(cg.GROUP_NODES) - switches - dead, (view, kw)
             assert "map_uv" not in dead and not dead & {"uv_image", "weight_image"}, (view, kw)
@@ -409,7 +410,7 @@ def test_group_matches_glint_core_for_a_mirror(core):
     color = core.reflection_color(uv, base)
     refl = core.reflection(color, None, spec, weight=weight)
     want = core.combine(base, refl, specular_base=S, coverage=color)
-    out = cg.evaluate_group(base, images_of(base, position, spec, uv, weight, lod),
+    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod),
                             lambda img, uvi: core.reflection_color(np.ascontiguousarray(uvi), img), gauss_clamp,
                             specular_light=light, specular_color=colour, use_blur=False)
     # the core clamps base - S coverage at 0; the random S here often exceeds the base
@@ -473,7 +474,7 @@ def test_the_offset_puts_the_region_back_where_it_was_cut(region, size):
     imgs = cg.region_images(frame, frame, region)
     x0, y0, x1, y1 = region
     dx, dy = imgs[cg.IMAGE_OFFSET][0, 0, :2]
-    placed = cg._translated(imgs[cg.IMAGE_UV], float(dx), float(dy), (h, w))
+    placed = gm._translated(imgs[cg.IMAGE_UV], float(dx), float(dy), (h, w))
     want = np.zeros_like(frame)
     want[y0:y1, x0:x1] = frame[y0:y1, x0:x1]
     assert np.array_equal(placed, want)
@@ -526,8 +527,8 @@ def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur, hidd
     else:
         kw = dict(specular_light=light, specular_color=colour)
     kw.update(use_bounce=bounce, use_blur=blur, use_hidden=hidden)
-    want = cg.evaluate_group(base, full, np_map_uv, gauss_clamp, **kw)
-    got = cg.evaluate_group(base, cut, np_map_uv, gauss_clamp, **kw)
+    want = gm.evaluate_group(base, full, np_map_uv, gauss_clamp, **kw)
+    got = gm.evaluate_group(base, cut, np_map_uv, gauss_clamp, **kw)
     assert np.abs(want["Image"] - base).max() > 0.05
     if blur:  # the blur's clamp at the region's edge of what it spread there: 6e-8 at most here
         assert np.abs(got["Image"] - want["Image"]).max() <= 1e-6
@@ -537,9 +538,9 @@ def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur, hidd
 
 def test_region_meeting_the_frame_untranslated_is_caught():
     with pytest.raises(ValueError, match="different sizes"):
-        cg._canvas([np.zeros((4, 5, 4)), np.zeros((6, 5))], (6, 5))
+        gm._canvas([np.zeros((4, 5, 4)), np.zeros((6, 5))], (6, 5))
     with pytest.raises(ValueError, match="does not land"):
-        cg._translated(np.zeros((3, 3, 4)), 0.25, 0.0, (8, 8))
+        gm._translated(np.zeros((3, 3, 4)), 0.25, 0.0, (8, 8))
 
 
 def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
@@ -570,11 +571,11 @@ def test_a_host_without_the_filter_runs_the_first_level_as_a_gaussian_of_its_sig
 
     def blur(img, sigma):
         sigmas.append(sigma)
-        return cg._softened(np.asarray(img, np.float32)) if sigma == cg.SOFTEN_SIGMA else gauss_clamp(img, sigma)
+        return gm._softened(np.asarray(img, np.float32)) if sigma == cg.SOFTEN_SIGMA else gauss_clamp(img, sigma)
 
     kw = dict(specular_light=light, specular_color=colour)
-    filt = cg.evaluate_group(base, images, np_map_uv, gauss_clamp, **kw)
-    gauss = cg.evaluate_group(base, images, np_map_uv, blur, soften_filters=False, **kw)
+    filt = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, **kw)
+    gauss = gm.evaluate_group(base, images, np_map_uv, blur, soften_filters=False, **kw)
     assert sigmas.count(cg.SOFTEN_SIGMA) == 1 and len(sigmas) == len(cg.BLUR_LEVELS)
     assert np.abs(filt["Reflection"]).max() > 0.01
     assert np.allclose(filt["Image"], gauss["Image"], atol=ATOL)
@@ -648,7 +649,7 @@ def test_the_coarse_canvas_comes_back_as_blenders_scale_reads_it(hw):
     img = np.random.default_rng(4).uniform(-1, 1, (ch, cw, 4)).astype(np.float32)
     x = (np.arange(w) * (cw / w))[None, :] * np.ones((h, 1))
     y = (np.arange(h) * (ch / h))[:, None] * np.ones((1, w))
-    assert np.allclose(cg._scaled_to_frame(img, (h, w)), bilinear_zero(img, x, y), atol=1e-6)
+    assert np.allclose(gm._scaled_to_frame(img, (h, w)), bilinear_zero(img, x, y), atol=1e-6)
     lod = np.random.default_rng(5).uniform(-1, 9, (h, w)).astype(np.float32)
     whole = cg.coarse_images(lod, (0, 0, w, h), w, h)
     if w > 4:
