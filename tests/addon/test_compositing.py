@@ -79,9 +79,11 @@ def test_the_soften_level_is_the_3x3_binomial_kernel():
 
 # -- an independent reference of the composite (sampling and blur: compositing_reference.py)
 
-def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidden=None, past_edge="zero"):
+def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidden=None, past_edge="zero",
+                        at_most_frame=False):
     """out = max(base + R, 0), R = D at the pixel's lod between Gaussian levels of
-    D, D = C W - min(rep S, base): written from the formula, not from the node list. With
+    D, D = C W - rep S, or with ``at_most_frame`` (the world's path) C W -
+    min(rep S, base): written from the formula, not from the node list. With
     ``bounce``, C is sampled from the frame with its first bounce, base + D.
     ``hidden`` (albedo, vis): those pixels (vis 0 in ``uv``) show albedo x the
     frame at the pixel, times their vis, and replace that share of S.
@@ -89,8 +91,10 @@ def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidd
     vis = uv[..., 2:3]
     rep = vis if hidden is None else vis + hidden[..., 3:4]
     own = 0.0 if hidden is None else hidden[..., :3] * hidden[..., 3:4] * base[..., :3]
-    # what is taken out: the engine's specular where a hit replaces it, at most the frame
-    out_of_frame = np.minimum(rep * (light[..., :3] * colour[..., :3]), base[..., :3])
+    # what is taken out: the engine's specular where a hit replaces it (at most the frame)
+    out_of_frame = rep * (light[..., :3] * colour[..., :3])
+    if at_most_frame:
+        out_of_frame = np.minimum(out_of_frame, base[..., :3])
     C = np.where(vis > 0, bilinear_clamp(base, uv[..., 0], uv[..., 1]) * vis, 0.0)
     D = (C[..., :3] + own) * weight[..., :3] - out_of_frame
     if bounce:
@@ -202,14 +206,14 @@ def test_hidden_sides_show_their_albedo_lit_by_the_frame_at_the_pixel(world, bou
     out = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, use_hidden=True, **kw)
     edge = "clamp" if whole_frame else "zero"  # the fine image's Map UV, or the Scale
     want, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden,
-                                  past_edge=edge)
+                                  past_edge=edge, at_most_frame=world)
     assert np.allclose(out["Image"][..., :3], want[..., :3], atol=ATOL)
     # switched off, the hidden image is not read: the pixels only lose S
     off = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, use_bounce=bounce, **kw)
     hidden_off = hidden.copy()
     hidden_off[..., :3] = 0
     want_off, _ = reference_composite(base, uv, weight, lod, light, colour, bounce=bounce, hidden=hidden_off,
-                                      past_edge=edge)
+                                      past_edge=edge, at_most_frame=world)
     assert np.allclose(off["Image"][..., :3], want_off[..., :3], atol=ATOL)
 
 
@@ -272,7 +276,9 @@ def test_second_bounce_runs_where_reflectors_can_meet():
 @pytest.mark.parametrize("bounce", [False, True])
 def test_the_world_path_is_the_passes_path_with_s_the_world_colour_times_w(bounce):
     """Under a uniform world the group's inputs are the world colour and W: its
-    short path must give what the passes' path gives for those inputs."""
+    short path must give what the passes' path gives for those inputs, but that
+    it takes out at most the frame (that S is a model; the passes' is what the
+    frame holds)."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene(seed=5)
     world = np.broadcast_to(np.array((0.3, 0.35, 0.45, 1.0), np.float32), base.shape)
     w_image = images_of(base, position, spec, uv, weight, lod)[cg.IMAGE_WEIGHT]
@@ -280,29 +286,42 @@ def test_the_world_path_is_the_passes_path_with_s_the_world_colour_times_w(bounc
     short = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv,
                               gauss_clamp, world_specular=True, **kw)
     full = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp, **kw)
-    want, _ = reference_composite(base, uv, weight, lod, world, w_image, bounce=bounce)
+    want, _ = reference_composite(base, uv, weight, lod, world, w_image, bounce=bounce, at_most_frame=True)
+    whole, _ = reference_composite(base, uv, weight, lod, world, w_image, bounce=bounce)
     assert np.allclose(short["Image"][..., :3], want[..., :3], atol=ATOL)
-    assert np.allclose(full["Image"][..., :3], want[..., :3], atol=ATOL)
+    assert np.allclose(full["Image"][..., :3], whole[..., :3], atol=ATOL)
     assert np.abs(short["Image"] - base).max() > 0.05
+    assert np.abs(want - whole).max() > 0.05  # the frame bounds what leaves somewhere
 
 
-def test_replaces_the_engine_specular_where_a_mirror_hit_is_found():
-    """vis 1, lod 0: the pixel's engine specular S leaves, the reflection C W comes in."""
+@pytest.mark.parametrize("world", [False, True])
+def test_replaces_the_engine_specular_where_a_mirror_hit_is_found(world):
+    """vis 1, lod 0: the pixel's engine specular S leaves, the reflection C W comes in;
+    under a uniform world, whose S is a model, at most the frame leaves."""
     base, position, spec, uv, seen, weight, lod, light, colour = scene()
     lod[:] = 0
-    out = gm.evaluate_group(base, images_of(base, position, spec, uv, weight, lod), np_map_uv, gauss_clamp,
-                            specular_light=light, specular_color=colour)["Image"]
+    images = images_of(base, position, spec, uv, weight, lod)
+    if world:
+        light, colour = np.broadcast_to(light[0, 0], base.shape), images[cg.IMAGE_WEIGHT]
+        kw = dict(specular_light=light[0, 0], specular_color=colour, world_specular=True)
+    else:
+        kw = dict(specular_light=light, specular_color=colour)
+    out = gm.evaluate_group(base, images, np_map_uv, gauss_clamp, **kw)["Image"]
     hit = uv[..., 2] > 0
     C = np_map_uv(base, uv_image(uv))
     S = uv[..., 2:3] * light[..., :3] * colour[..., :3]
-    # the core's combine with a specular base (glint_core.combine): at most the frame taken out
-    want = np.maximum(base[..., :3] - S, 0.0) + C[..., :3] * weight[..., :3]
+    if world:  # the core's combine with a specular base (glint_core.combine)
+        want = np.maximum(base[..., :3] - S, 0.0) + C[..., :3] * weight[..., :3]
+    else:
+        want = np.maximum(base[..., :3] - S + C[..., :3] * weight[..., :3], 0.0)
     assert np.allclose(out[hit, :3], want[hit], atol=ATOL)
     assert np.array_equal(out[~hit], base[~hit])
-    # the engine's specular exceeds the frame on some hits: those show the reflection alone, never less
+    # the engine's specular exceeds the frame on some hits: under a uniform world
+    # those show the reflection alone, never less
     short = hit[..., None] & (S > base[..., :3])
     assert short.sum() > 10
-    assert np.allclose(out[..., :3][short], (C[..., :3] * weight[..., :3])[short], atol=ATOL)
+    if world:
+        assert np.allclose(out[..., :3][short], (C[..., :3] * weight[..., :3])[short], atol=ATOL)
     assert out[..., :3].min() >= 0.0
 
 

@@ -31,10 +31,11 @@ and the group (:data:`GROUP_NODES` / :data:`GROUP_LINKS`) computes, per pixel,
                                                         hidden side lit by what
                                                         reflects it (below)
     S   = Specular Light * Specular Color               the engine's own specular
-    D   = C * W - min(rep * S, frame)                   what changes: the engine's
+    D   = C * W - rep * S                               what changes: the engine's
                                                         specular out where a hit
-                                                        replaces it, at most the
-                                                        frame, the reflection in
+                                                        replaces it, the reflection in
+                                                        (under a uniform world:
+                                                        C * W - min(rep * S, frame))
     D2  = D + W * vis * D(u, v)                         the second bounce (below)
     R   = D2 blurred at the pixel's lod                 (rough surfaces only)
     out = max(frame + R, 0)                             no pixel below 0
@@ -50,13 +51,16 @@ Engines without
 those passes (Workbench) leave S unlinked, 0: the reflection is added, which
 is what there is to replace there (docs/addon.md, per engine).
 
-At most the frame: frame + D = max(frame - rep * S, 0) + C * W per channel,
-the core's combine with a specular base (docs/look-core.md). The S taken out
-is a model of what the engine put in, and where the engine put in less (Eevee
+At most the frame: under a uniform world, frame + D = max(frame - rep * S, 0)
++ C * W per channel, the core's combine with a specular base
+(docs/look-core.md). That S is a model of what the engine put in, and where
+the engine put in less (Eevee
 Legacy's ambient occlusion darkens its specular; a metal's frame holds nothing
 else) taking out the whole of it left the pixel below the reflection alone,
 or below 0: a black band under a metal sphere, negative values in a written
-EXR. The frame is the most the engine's specular can have been. C is read
+EXR. The frame is the most the engine's specular can have been. The passes'
+S is what the engine put in, which the frame holds, and Workbench's is 0:
+those paths take it out whole, without the three nodes. C is read
 once: the minimum is taken of what leaves, not of D and C * W - frame, which
 would run Map UV twice in a compositor that makes a node's output again for
 each reader (3.4's, docs/frame-cost.md). The blur
@@ -372,17 +376,17 @@ GROUP_NODES: Dict[str, Tuple[str, Dict[str, object], Dict[int, object]]] = {
     "finite_g": _math("MAXIMUM", False, {1: 0.0}),
     "finite_b": _math("MAXIMUM", False, {1: 0.0}),
     "finite_specular": ("combine", {}, {3: 1.0}),
-    # Under a uniform world S = colour x W, two nodes fewer than the passes'
-    # path (the compositor runs each on every pixel of its canvas).
-    "world_specular": _mix("MULTIPLY", {0: 1.0}),    # W * colour
-    "use_passes": ("switch", {"on": True}, {}),
-    # What is taken out: rep * S, at most the frame (see "At most the frame"
-    # above), the frame read on the region's pixels. Each operation's first
-    # image input is region-sized, so the region sizes it; C is read once.
-    "replaced_specular": _mix("MULTIPLY", {0: 1.0}),  # rep * S
+    "delta": _mix("SUBTRACT"),                      # C * W - rep * S
+    # Under a uniform world S = colour x W, a model of what the engine put in:
+    # taken out at most the frame (see "At most the frame" above), the frame
+    # read on the region's pixels. Each operation's first image input is
+    # region-sized, so the region sizes it; C is read once.
+    "world_specular": _mix("MULTIPLY", {0: 1.0}),     # W * colour
+    "replaced_specular": _mix("MULTIPLY", {0: 1.0}),  # rep * W * colour
     "frame_to_region": _translate(-1),
-    "taken_out": _mix("DARKEN", {0: 1.0}),             # min(rep * S, frame)
-    "delta": _mix("SUBTRACT", {0: 1.0}),               # D = C * W - min(rep * S, frame)
+    "taken_out": _mix("DARKEN", {0: 1.0}),             # min(rep * W * colour, frame)
+    "world_delta": _mix("SUBTRACT", {0: 1.0}),         # C * W - min(rep * W * colour, frame)
+    "use_passes": ("switch", {"on": True}, {}),
     # D made once where the compositor would make it again for each node that
     # reads it (3.x-4.1's Tiled compositor: the first level's blur, the coarse
     # canvas's Map UV, the first mix and, with the bounce, its source each
@@ -493,24 +497,29 @@ GROUP_LINKS: List[Tuple[str, int, str, int]] = [
     ("finite_r", 0, "finite_specular", 0),
     ("finite_g", 0, "finite_specular", 1),
     ("finite_b", 0, "finite_specular", 2),
-    # the passes' path: the frame-sized S, moved so that the region-sized
-    # operation that takes it reads the region's pixels
+    # the passes' path: the frame-sized S is read on the region (C * W first,
+    # so the region sizes the operation); the frame holds all of the engine's
+    # own specular, so it is taken out whole
     ("finite_specular", 0, "specular_to_region", 0),
-    ("specular_to_region", 0, "use_passes", 1),
-    # the world's path; input 0 when off, the passes' nodes not run
+    ("sep_uv", 3, "delta", 0),
+    ("weighted", 0, "delta", 1),
+    ("specular_to_region", 0, "delta", 2),
+    # the world's path
     ("weight_image", 0, "world_specular", 1),
     (GROUP_IN, 1, "world_specular", 2),
-    ("world_specular", 0, "use_passes", 0),
     ("sep_uv", 3, "replaced_specular", 1),
-    ("use_passes", 0, "replaced_specular", 2),
+    ("world_specular", 0, "replaced_specular", 2),
     (GROUP_IN, 0, "frame_to_region", 0),
     ("replaced_specular", 0, "taken_out", 1),
     ("frame_to_region", 0, "taken_out", 2),
-    ("weighted", 0, "delta", 1),
-    ("taken_out", 0, "delta", 2),
+    ("weighted", 0, "world_delta", 1),
+    ("taken_out", 0, "world_delta", 2),
+    # input 0 when off: the world's path, the passes' nodes not run
+    ("world_delta", 0, "use_passes", 0),
+    ("delta", 0, "use_passes", 1),
     # input 0 when off: D as it is; on: D made once (d_kept)
-    ("delta", 0, "d_kept", 0),
-    ("delta", 0, "d_buffered", 0),
+    ("use_passes", 0, "d_kept", 0),
+    ("use_passes", 0, "d_buffered", 0),
     ("d_kept", 0, "d_buffered", 1),
     ("d_buffered", 0, "delta_to_frame", 0),
     (GROUP_IN, 0, "bounce_source", 1),
