@@ -58,7 +58,7 @@ def main():
     from glint.state import STATE
     core = native.load()
     scene, tris = build_scene(opts["size"], opts["samples"])
-    scene.eevee.use_ssr = False
+    kit.use_eevee(scene, own_reflections=False)  # this Blender's Eevee, its own reflections off
     scene.glint.backend = "CPU"
     walls = {"plain": [], "passes": [], "world": []}
     sources = {}

@@ -129,6 +129,27 @@ def test_layers_exr_holds_the_gbuffer(mirror_on):
     assert np.array_equal(layers["Visibility"][..., 0], dump["uv"][..., 2])
 
 
+def test_a_still_a_script_renders_writes_its_layers_exr_with_the_frame_number(blender, samples, tmp_path):
+    """bpy.ops.render.render(), a still as F12 or a script renders it, not -f: the
+    layers EXR is <output>glint_0001.exr as with -f 1 (5.x's File Output numbers only
+    an animation's files unless its name asks for the frame)."""
+    out = str(tmp_path / "still")
+    blender.render(samples["mirror_floor"], out, {
+        "engine": "BLENDER_EEVEE", "glint": {"write_layers_exr": True, "backend": "CPU", "enabled": True},
+        "python": "bpy.ops.render.render()"}, frames=())
+    assert sorted(n for n in os.listdir(out) if n.endswith(".exr")) == ["frame_glint_0001.exr"]
+
+
+def test_an_animation_writes_one_layers_exr_per_frame(blender, samples, tmp_path):
+    """-a: frame_glint_0001.exr, frame_glint_0002.exr beside the frames, each numbered once."""
+    out = str(tmp_path / "animation")
+    blender.render(samples["mirror_floor"], out, {
+        "engine": "BLENDER_EEVEE", "glint": {"write_layers_exr": True, "backend": "CPU", "enabled": True},
+        "python": "bpy.context.scene.frame_start = 1\nbpy.context.scene.frame_end = 2"}, frames=("-a",))
+    exrs = sorted(n for n in os.listdir(out) if n.endswith(".exr"))
+    assert exrs == ["frame_0001.exr", "frame_0002.exr", "frame_glint_0001.exr", "frame_glint_0002.exr"]
+
+
 def test_no_reflection_scene_is_unchanged(blender, samples, session_dir):
     on_dir = os.path.join(session_dir, "noref_on")
     off_dir = os.path.join(session_dir, "noref_off")

@@ -497,16 +497,20 @@ def exr_input(node, slot: str):
     return node.inputs[slot]
 
 
-def exr_path(node) -> str:
-    return node.directory + node.file_name if hasattr(node, "directory") else node.base_path
+# A 5.x File Output numbers only an animation's files unless its file name
+# asks for the frame: a still (F12, a script's render) wrote `glint_.exr`, and
+# every such render overwrote it. 3.x-4.x number every file, with 4 digits.
+FRAME_NUMBER = "####"
 
 
 def set_exr_path(node, path: str) -> None:
-    if exr_path(node) == path:
-        return
+    """Point the layers EXR's File Output at ``path`` + the frame number; a node
+    a 5.x Glint set up before FRAME_NUMBER gets it too."""
     if hasattr(node, "directory"):
         # 5.0 splits the old base path into a folder and a file name prefix.
         folder, _, name = path.rpartition("/")
-        node.directory, node.file_name = folder + "/" if folder else "//", name
-    else:
+        want = (folder + "/" if folder else "//", name + FRAME_NUMBER)
+        if (node.directory, node.file_name) != want:
+            node.directory, node.file_name = want
+    elif node.base_path != path:
         node.base_path = path
