@@ -54,21 +54,20 @@ is what there is to replace there (docs/addon.md, per engine).
 At most the frame: under a uniform world, frame + D = max(frame - rep * S, 0)
 + C * W per channel, the core's combine with a specular base
 (docs/look-core.md). That S is a model of what the engine put in, and where
-the engine put in less (Eevee
-Legacy's ambient occlusion darkens its specular; a metal's frame holds nothing
-else) taking out the whole of it left the pixel below the reflection alone,
-or below 0: a black band under a metal sphere, negative values in a written
-EXR. The frame is the most the engine's specular can have been. The passes'
-S is what the engine put in, which the frame holds, and Workbench's is 0:
-those paths take it out whole, without the three nodes. C is read
-once: the minimum is taken of what leaves, not of D and C * W - frame, which
-would run Map UV twice in a compositor that makes a node's output again for
-each reader (3.4's, docs/frame-cost.md). The blur
-then spreads each pixel's D over its neighbours, whose frames may hold less,
-so the frame + R is held at 0 or above after it. That is one node on the
-frame's canvas (a Mix Lighten with black), cheaper than max(R, -frame) on the
-region, which takes three; it would also raise a negative pixel of the
-engine's own to 0, which no engine Glint composites on renders.
+the engine put in less (Eevee Legacy's ambient occlusion darkens its specular;
+a metal's frame holds nothing else) taking out the whole of it left the pixel
+below the reflection alone, or below 0: a black band under a metal sphere,
+negative values in a written EXR. The frame is the most the engine's specular
+can have been. The passes' S is what the engine put in, which the frame holds,
+and Workbench's is 0: those paths take it out whole, without the three nodes.
+C is read once: the minimum is taken of what leaves, not of D and C * W -
+frame, which would run Map UV twice in a compositor that makes a node's output
+again for each reader (3.4's, docs/frame-cost.md). The blur then spreads each
+pixel's D over its neighbours, whose frames may hold less, so frame + R is
+held at 0 or above after it: one node on the frame's canvas (a Mix Lighten
+with black), cheaper than max(R, -frame) on the region, which takes three. It
+would also raise a negative pixel of the engine's own to 0, which no engine
+Glint composites on renders.
 
 The blur: :data:`BLUR_LEVELS` Gaussian levels of D (the first Blender's 3x3
 Soften filter after 4.1 and its Blur node's sampled Gaussian before, both of
