@@ -129,14 +129,28 @@ def test_layers_exr_holds_the_gbuffer(mirror_on):
     assert np.array_equal(layers["Visibility"][..., 0], dump["uv"][..., 2])
 
 
+# A still rendered twice, the second time after the layers node's file name lost
+# its frame number, as a 5.x Glint before the fix left it.
+STILL_TWICE = """
+bpy.ops.render.render()
+from glint.host import nodes as host_nodes
+from glint.logic import compositing as cg
+node = host_nodes.scene_tree(bpy.context.scene).nodes[cg.EXR_NODE_NAME]
+if hasattr(node, "file_name"):
+    node.file_name = node.file_name.rstrip("#")
+bpy.ops.render.render()
+"""
+
+
 def test_a_still_a_script_renders_writes_its_layers_exr_with_the_frame_number(blender, samples, tmp_path):
     """bpy.ops.render.render(), a still as F12 or a script renders it, not -f: the
     layers EXR is <output>glint_0001.exr as with -f 1 (5.x's File Output numbers only
-    an animation's files unless its name asks for the frame)."""
+    an animation's files unless its name asks for the frame), also from a node an
+    older Glint set up."""
     out = str(tmp_path / "still")
     blender.render(samples["mirror_floor"], out, {
         "engine": "BLENDER_EEVEE", "glint": {"write_layers_exr": True, "backend": "CPU", "enabled": True},
-        "python": "bpy.ops.render.render()"}, frames=())
+        "python": STILL_TWICE}, frames=())
     assert sorted(n for n in os.listdir(out) if n.endswith(".exr")) == ["frame_glint_0001.exr"]
 
 
