@@ -92,16 +92,16 @@ def reference_composite(base, uv, weight, lod, light, colour, bounce=False, hidd
     rep = vis if hidden is None else vis + hidden[..., 3:4]
     own = 0.0 if hidden is None else hidden[..., :3] * hidden[..., 3:4] * base[..., :3]
     # what is taken out: the engine's specular where a hit replaces it (at most the frame)
-    out_of_frame = rep * (light[..., :3] * colour[..., :3])
+    taken_out = rep * (light[..., :3] * colour[..., :3])
     if at_most_frame:
-        out_of_frame = np.minimum(out_of_frame, base[..., :3])
+        taken_out = np.minimum(taken_out, base[..., :3])
     C = np.where(vis > 0, bilinear_clamp(base, uv[..., 0], uv[..., 1]) * vis, 0.0)
-    D = (C[..., :3] + own) * weight[..., :3] - out_of_frame
+    D = (C[..., :3] + own) * weight[..., :3] - taken_out
     if bounce:
         first = base.copy()
         first[..., :3] += D
         C = np.where(vis > 0, bilinear_clamp(first, uv[..., 0], uv[..., 1]) * vis, 0.0)
-        D = (C[..., :3] + own) * weight[..., :3] - out_of_frame
+        D = (C[..., :3] + own) * weight[..., :3] - taken_out
     R = blurred_at_lod(D, lod, past_edge=past_edge)
     out = base.copy()
     out[..., :3] = np.maximum(out[..., :3] + R, 0.0)  # no pixel below 0
