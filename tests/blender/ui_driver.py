@@ -16,8 +16,8 @@ timeout (seconds per render), renders: a list of steps, one F12 each, with keys
 
 F12 is ``render.render('INVOKE_DEFAULT')`` from a timer in the main window's
 context: the render runs as a job on its own thread and opens the render window,
-as the key does. For render i: <out>/render_<i>.exr (float) and .png saved from
-the Render Result, screenshots <out>/window_<w>_<i>.png. <out>/result.json holds,
+as the key does. For render i: <out>/render_<i>.exr (float) saved from the
+Render Result, screenshots <out>/window_<w>_<i>.png. <out>/result.json holds,
 per render, the handler calls (with the thread each ran on), Glint's status, the
 Glint panel's draws, and at the end the Info log's reports. Quits Blender when
 done, or exits with status 4 after a timeout.
@@ -44,6 +44,12 @@ from glint.host import nodes as hn  # noqa: E402,F401  (steps' code reaches the 
 scene_config.apply(scene, cfg)
 r = scene.render
 exec(cfg.get("python", ""))
+# The Render Result is saved in the scene's format, set here once: after a
+# render Blender may refuse Python's writes to ID data for a long while (a
+# process-wide read-only flag that Python callbacks on the render thread and
+# the main thread set and restore; seen stuck for over 30 s after a Cycles F12
+# on 4.3), so nothing is written to the scene when a render is collected.
+r.image_settings.file_format, r.image_settings.color_depth = "OPEN_EXR", "32"
 
 T0 = time.monotonic()
 RENDERS = cfg.get("renders", [{}])
@@ -206,22 +212,6 @@ def _screenshots(tag):
                 result["errors"].append(f"screenshot {w}: {exc}")
 
 
-def _writes_allowed():
-    """Whether Python may write to ID data at this moment. Blender forbids it
-    while a read-only Python callback runs (a panel's draw, a Python render
-    engine's method such as Cycles'), and the flag is the whole process's: a
-    timer on the main thread can meet it raised by Cycles on the render thread
-    just after a render ("Writing to ID classes in this context is not
-    allowed"). Tried with a write of the value already there."""
-    try:
-        r.image_settings.file_format = r.image_settings.file_format
-    except AttributeError as exc:
-        if "not allowed" in str(exc):
-            return False
-        raise
-    return True
-
-
 def _collect(i, step):
     cur = _current()
     cur["glint"] = _glint_status()
@@ -231,17 +221,10 @@ def _collect(i, step):
     img = bpy.data.images.get("Render Result")
     cur["has_render_result"] = img is not None
     if img is not None:
-        fmt = (r.image_settings.file_format, r.image_settings.color_depth)
         try:
-            for name, file_format, depth in ((f"render_{i}.exr", "OPEN_EXR", "32"),
-                                             (f"render_{i}.png", "PNG", "8")):
-                r.image_settings.file_format, r.image_settings.color_depth = file_format, depth
-                try:
-                    img.save_render(os.path.join(OUT, name), scene=scene)
-                except Exception as exc:
-                    result["errors"].append(f"save_render {name}: {exc}")
-        finally:
-            r.image_settings.file_format, r.image_settings.color_depth = fmt
+            img.save_render(os.path.join(OUT, f"render_{i}.exr"), scene=scene)
+        except Exception as exc:
+            result["errors"].append(f"save_render render_{i}.exr: {exc}")
 
 
 def _finish():
@@ -332,11 +315,6 @@ def _tick():
     if phase == "settle":
         # A few redraws of the render window and the panel before looking at them.
         if time.monotonic() - state["settle"] < 0.6:
-            return 0.1
-        if not _writes_allowed():  # _collect sets the image format to save the frame
-            if time.monotonic() - state["settle"] > 30:
-                raise RuntimeError("Blender refused writes to the scene for 30 s after the render")
-            _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
             return 0.1
         _collect(i, RENDERS[i])
         if SHOTS:
