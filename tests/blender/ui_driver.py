@@ -44,11 +44,10 @@ from glint.host import nodes as hn  # noqa: E402,F401  (steps' code reaches the 
 scene_config.apply(scene, cfg)
 r = scene.render
 exec(cfg.get("python", ""))
-# The Render Result is saved in the scene's format, set here once: after a
-# render Blender may refuse Python's writes to ID data for a long while (a
-# process-wide read-only flag that Python callbacks on the render thread and
-# the main thread set and restore; seen stuck for over 30 s after a Cycles F12
-# on 4.3), so nothing is written to the scene when a render is collected.
+# The Render Result is saved in the scene's format, set here once, so that
+# collecting a render writes nothing to the scene: right after a render Blender
+# may refuse Python's writes to ID data (_writes_allowed), and the frame is then
+# saved before the driver waits that out.
 r.image_settings.file_format, r.image_settings.color_depth = "OPEN_EXR", "32"
 
 T0 = time.monotonic()
@@ -212,6 +211,22 @@ def _screenshots(tag):
                 result["errors"].append(f"screenshot {w}: {exc}")
 
 
+def _writes_allowed():
+    """Whether Python may write to ID data, and call operators, at this moment.
+    Blender forbids both while a read-only Python callback runs (a panel's draw,
+    a Python render engine's method such as Cycles'), with one process-wide flag
+    that each callback saves, sets and restores: callbacks on the render thread
+    and the main thread can interleave so that it stays set after a render.
+    Tried with a write of the value already there."""
+    try:
+        r.image_settings.file_format = r.image_settings.file_format
+    except AttributeError as exc:
+        if "not allowed" in str(exc):
+            return False
+        raise
+    return True
+
+
 def _collect(i, step):
     cur = _current()
     cur["glint"] = _glint_status()
@@ -316,7 +331,16 @@ def _tick():
         # A few redraws of the render window and the panel before looking at them.
         if time.monotonic() - state["settle"] < 0.6:
             return 0.1
-        _collect(i, RENDERS[i])
+        if "collected" not in _current():
+            _collect(i, RENDERS[i])
+            _current()["collected"] = _now()
+        # The screenshots, the next step's code and F12, and the Info log at the
+        # end all write or call operators.
+        if not _writes_allowed():
+            if time.monotonic() - state["settle"] > 30:
+                raise RuntimeError("Blender refused writes and operators for 30 s after the render")
+            _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
+            return 0.1
         if SHOTS:
             _screenshots(str(i))
         state["index"] = i + 1
