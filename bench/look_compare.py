@@ -14,6 +14,8 @@ isolates the reflections of the objects three ways:
           on 4.2 and later
   glint   Eevee with Glint on (default preset, backend CPU) minus Eevee with it off
           (SSR off in both)
+  glint_own  (only with --methods) Glint on over Eevee's own reflections (SSR or ray
+          tracing on) minus plain Eevee: what a user gets who leaves Eevee's own on
 
 Every frame is read back as linear float from an EXR (view transform Standard). Over
 the reflecting pixels (on a reflecting surface, away from its edges, where Cycles'
@@ -31,12 +33,14 @@ docs/look.md explains the method. Usage, from a checkout after building:
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
       [--size 480x270] [--cycles-samples 128] [--eevee-samples 32] [--threshold 0.01] \\
       [--rounds 2] [--out docs/look] [--addon <folder holding glint/>] [--scenes floor,rough,metal,corridor,default] \\
-      [--cycles-cache DIR] [--arrays DIR] [--digits 2]
+      [--cycles-cache DIR] [--arrays DIR] [--digits 2] [--methods ssr,glint]
 
 --arrays DIR writes each scene's linear frames, differences, pixel masks and Glint's
 last G-buffer, layers (uv, weight) and projection to DIR/<scene>.npz, for finding where
 an error comes from (glint_core.trace reruns the march from them).
 --digits N prints strength and error with N decimals (3 to tell two changes apart).
+--methods picks the Eevee methods (Cycles is always the reference): ssr, glint and
+glint_own, the last one rendering one more Eevee frame per round.
 --cycles-cache keeps each scene's four Cycles frames in DIR and reads them back when the
 scene, size, samples, Blender and the code that makes the frames are the same: Cycles is
 most of a run's time and does not depend on Glint, so comparing Glint's changes needs it
@@ -65,7 +69,7 @@ sys.path.insert(0, HERE)
 import blender_scene_kit as kit  # noqa: E402
 ROOT = os.path.dirname(HERE)
 SCENES = ("floor", "rough", "metal", "corridor", "default")
-METHODS = ("cycles", "ssr", "glint")
+EEVEE_METHODS = ("ssr", "glint", "glint_own")
 LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)  # Rec. 709, Blender's linear primaries
 # Isolated reflections are signed (an object replaces the sky it hides): shown as
 # 0.5 + GAIN * difference, so mid grey is "no change".
@@ -85,13 +89,13 @@ def _args():
     return kit.script_options(
         {"size": (480, 270), "cycles-samples": 128, "eevee-samples": 32, "threshold": 0.01, "rounds": 2,
          "out": os.path.join(ROOT, "docs", "look"), "addon": os.path.join(ROOT, "addon"),
-         "scenes": list(SCENES), "cycles-cache": "", "arrays": "", "digits": 2},
+         "scenes": list(SCENES), "cycles-cache": "", "arrays": "", "digits": 2, "methods": ["ssr", "glint"]},
         {"size": _at_least(kit.frame_size, 8, "size"), "cycles-samples": _at_least(int, 2, "cycles-samples"),
          "eevee-samples": _at_least(int, 2, "eevee-samples"), "rounds": _at_least(int, 1, "rounds"),
          "threshold": float, "out": os.path.abspath, "addon": os.path.abspath,
          "scenes": kit.names_among(SCENES, "scenes"),
          "cycles-cache": os.path.abspath, "arrays": os.path.abspath,
-         "digits": _at_least(int, 0, "digits")})
+         "digits": _at_least(int, 0, "digits"), "methods": kit.names_among(EEVEE_METHODS, "methods")})
 
 
 _register_addon = kit.register_addon
@@ -293,11 +297,12 @@ def cycles_pair(scene, meshes, seed, tmp):
 
 
 def eevee(scene, mode, tmp, state, stages):
-    """Renders with Eevee plain, with its SSR or with Glint; Glint's stage timings
-    go into ``stages``."""
-    kit.use_eevee(scene, own_reflections=mode == "ssr")
+    """Renders with Eevee plain, with its own reflections, with Glint, or with both
+    (``glint_own``); Glint's stage timings go into ``stages``."""
+    glint = mode in ("glint", "glint_own")
+    kit.use_eevee(scene, own_reflections=mode in ("ssr", "glint_own"))
     g = scene.glint
-    if mode == "glint":
+    if glint:
         g.backend = "CPU"
         if not g.enabled:
             g.enabled = True
@@ -305,7 +310,7 @@ def eevee(scene, mode, tmp, state, stages):
         g.enabled = False
     before = state.last
     px, ms = render(scene, os.path.join(tmp, "frame.exr"))
-    if mode == "glint":
+    if glint:
         # A new report, and an "ok" one: otherwise the frame is Eevee's alone and
         # every figure of Glint's would be of nothing.
         last = state.last
@@ -439,11 +444,13 @@ def run_scene(name, opts, state, tmp):
     cycles_frame = (with_a + with_b) / 2
 
     t0 = time.perf_counter()
-    modes = ("plain", "ssr", "glint")
+    modes = ("plain", *opts["methods"])
+    methods = ("cycles", *opts["methods"])
     frames, added_ms, timings = {}, {m: [] for m in modes[1:]}, {}
     for k in range(opts["rounds"] + 1):  # round 0 compiles shaders and warms caches: not timed
         walls = {}
-        for mode in modes[k % 3:] + modes[:k % 3]:
+        first = k % len(modes)
+        for mode in modes[first:] + modes[:first]:
             frames[mode], walls[mode] = eevee(scene, mode, tmp, state, timings)
         if k:
             for mode in added_ms:
@@ -457,11 +464,11 @@ def run_scene(name, opts, state, tmp):
     reflecting = on & (np.abs(_box3(c)) @ LUMA > opts["threshold"])
     if not reflecting.any():
         raise RuntimeError(f"scene {name}: no pixel reflects more than --threshold {opts['threshold']}")
-    diffs = {"cycles": c, "ssr": frames["ssr"] - frames["plain"], "glint": frames["glint"] - frames["plain"]}
+    diffs = {"cycles": c, **{m: frames[m] - frames["plain"] for m in opts["methods"]}}
     added = {"cycles": float("nan"), **{m: statistics.median(v) for m, v in added_ms.items()}}
     quiet = on & ~reflecting
     rows = []
-    for method in METHODS:
+    for method in methods:
         strength, error, change, false_area = figures(diffs[method], c, reflecting, off, quiet, opts["threshold"])
         if method == "cycles":
             change = float(np.abs(c[off]).max()) if off.any() else 0.0
@@ -476,7 +483,8 @@ def run_scene(name, opts, state, tmp):
     noise = figures(c_b, c_a, reflecting, off, quiet, opts["threshold"])[1]
 
     os.makedirs(opts["out"], exist_ok=True)
-    for method, frame in (("cycles", cycles_frame), ("ssr", frames["ssr"]), ("glint", frames["glint"])):
+    for method in methods:
+        frame = cycles_frame if method == "cycles" else frames[method]
         write_png(os.path.join(opts["out"], f"{name}_{method}.png"), _srgb(frame))
         write_png(os.path.join(opts["out"], f"{name}_{method}_reflection.png"),
                   np.clip(0.5 + REFLECTION_GAIN * diffs[method], 0.0, 1.0))
@@ -488,7 +496,7 @@ def run_scene(name, opts, state, tmp):
         os.makedirs(opts["arrays"], exist_ok=True)
         np.savez_compressed(os.path.join(opts["arrays"], f"{name}.npz"), reflecting=reflecting, on=on,
                             cycles_frame=cycles_frame, **{f"{m}_frame": frames[m] for m in modes},
-                            **{f"{m}_diff": diffs[m] for m in METHODS},
+                            **{f"{m}_diff": diffs[m] for m in methods},
                             **{f"glint_{k}": np.asarray(state.arrays[k]) for k in ("uv", "weight", "hidden", "position",
                                                                                   "normal", "specular", "projection")
                                if k in state.arrays})
