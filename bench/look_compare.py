@@ -27,7 +27,12 @@ the method makes on the pixels that reflect nothing (off the reflecting surfaces
 many pixels of the reflecting surfaces its frame leaves with a channel below 0; the
 frame error, L1(frame - Cycles' frame)/L1(c) over the same pixels, the whole frame
 judged rather than its change (with plain Eevee's, the frame every method starts from,
-in the second table); and the median wall time it adds to the Eevee frame.
+in the second table); and the median wall time it adds to the Eevee frame. The second
+table also gives Glint's strength / error had Eevee shaded the scene as Cycles does: the
+add-on's compositor group (its numpy model in tests/addon) run with Glint's layers on
+Cycles' frame without reflections, which leaves Glint's own error (its hits, weights,
+blur, bounce) without the base frame's; and how far that model is from Blender's own
+composite on Eevee's frame (the model's gap, on the error's scale).
 docs/look.md explains the method. Usage, from a checkout after building:
 
   blender -b --factory-startup -noaudio --python bench/look_compare.py -- \\
@@ -296,9 +301,10 @@ def cycles_pair(scene, meshes, seed, tmp):
     return frames[True], frames[False]
 
 
-def eevee(scene, mode, tmp, state, stages):
+def eevee(scene, mode, tmp, state, stages, snapshot):
     """Renders with Eevee plain, with its own reflections, with Glint, or with both
-    (``glint_own``); Glint's stage timings go into ``stages``."""
+    (``glint_own``); Glint's stage timings go into ``stages``, and after a
+    ``glint`` frame what :func:`glint_on_cycles` needs into ``snapshot``."""
     glint = mode in ("glint", "glint_own")
     kit.use_eevee(scene, own_reflections=mode in ("ssr", "glint_own"))
     g = scene.glint
@@ -317,6 +323,8 @@ def eevee(scene, mode, tmp, state, stages):
         if last is None or last is before or last.status != "ok":
             raise RuntimeError(f"Glint did not run on the frame: {last}")
         stages.update(getattr(last, "timings_ms", None) or {})
+        if mode == "glint":
+            snapshot["glint"] = glint_snapshot(scene, state)
     return px, ms
 
 
@@ -434,6 +442,61 @@ CYCLES_CODE = (_material, _diffuse, _add, _plane, _sun, _camera, _floor_scene, _
                build_scene, render, cycles_pair)
 
 
+def glint_snapshot(scene, state):
+    """What :func:`glint_on_cycles` needs of a Glint frame, taken just after it:
+    Glint's layers, the Switches its group ran with and the world colour of S
+    (None off the world colour's path: the passes' S has no Cycles counterpart)."""
+    from glint import compositor
+    from glint.host import engines, nodes as host_nodes
+    from glint.logic import world as world_logic
+    group = compositor.find_group()
+    if group is None or not state.arrays:
+        return None
+    switch = {n: host_nodes.switch_is_on(group.nodes[n]) for n in ("use_passes", "use_bounce", "use_hidden", "use_blur")}
+    if switch["use_passes"]:
+        return None
+    _, colour = world_logic.specular_source(compositor.describe_world(scene.world),
+                                            engines.eevee_traces_reflections(scene))
+    return dict(arrays=dict(state.arrays), switch=switch, colour=colour, soften=host_nodes.soften_is_a_filter())
+
+
+def glint_on_cycles(cycles_without, snap):
+    """Glint's change had the engine shaded as Cycles does (or on any other frame
+    given as ``cycles_without``): the add-on's compositor
+    group, as its numpy model runs it (tests/addon/group_model.py: Map UV as a
+    bilinear read, the blur levels as exact Gaussians), on Cycles' frame without
+    reflections instead of Eevee's plain frame, with Glint's layers of the last
+    frame it rendered and the Switches the group ran with. What is left of the
+    error then is Glint's own (its hits, weights, blur and bounce), not the base
+    frame's shading. ``snap``: :func:`glint_snapshot`'s. The model is this
+    checkout's, whatever --addon is."""
+    sys.path.insert(0, os.path.join(ROOT, "tests", "addon"))
+    import group_model as gm
+    from compositing_reference import bilinear_clamp, gauss_clamp
+
+    def map_uv(image, uv_rgba):
+        vis = uv_rgba[..., 2:3]
+        return np.where(vis > 0, bilinear_clamp(image, uv_rgba[..., 0], uv_rgba[..., 1]) * vis, 0).astype(np.float32)
+
+    cg = gm.cg
+    uv, weight = (np.asarray(snap["arrays"][k], np.float32) for k in ("uv", "weight"))
+    hidden = snap["arrays"].get("hidden")
+    switch = snap["switch"]
+    h, w = uv.shape[:2]
+    blank = np.zeros_like(uv)
+    images = {cg.IMAGE_UV: uv, cg.IMAGE_WEIGHT: weight,
+              cg.IMAGE_HIDDEN: blank if hidden is None else np.asarray(hidden, np.float32),
+              cg.IMAGE_DEBUG: blank, cg.IMAGE_POSITION: blank, cg.IMAGE_NORMAL: blank, cg.IMAGE_SPECULAR: blank,
+              **cg.coarse_images(weight[..., 3], (0, 0, w, h), w, h)}
+    base = np.concatenate([cycles_without[..., :3], np.ones((h, w, 1))], axis=-1).astype(np.float32)
+    light = np.broadcast_to(np.array((*snap["colour"], 1.0), np.float32), base.shape).copy()
+    out = gm.evaluate_group(base, images, map_uv, gauss_clamp, specular_light=light, world_specular=True,
+                            use_blur=switch["use_blur"], use_bounce=switch["use_bounce"],
+                            use_hidden=switch["use_hidden"], soften_filters=snap["soften"],
+                            whole_frame=True, scale_read_back=False)
+    return out["Image"][..., :3] - base[..., :3]
+
+
 def run_scene(name, opts, state, tmp):
     scene, reflectors, meshes = build_scene(name, opts)
     t0 = time.perf_counter()
@@ -446,12 +509,12 @@ def run_scene(name, opts, state, tmp):
     t0 = time.perf_counter()
     modes = ("plain", *opts["methods"])
     methods = ("cycles", *opts["methods"])
-    frames, added_ms, timings = {}, {m: [] for m in modes[1:]}, {}
+    frames, added_ms, timings, snapshot = {}, {m: [] for m in modes[1:]}, {}, {}
     for k in range(opts["rounds"] + 1):  # round 0 compiles shaders and warms caches: not timed
         walls = {}
         first = k % len(modes)
         for mode in modes[first:] + modes[:first]:
-            frames[mode], walls[mode] = eevee(scene, mode, tmp, state, timings)
+            frames[mode], walls[mode] = eevee(scene, mode, tmp, state, timings, snapshot)
         if k:
             for mode in added_ms:
                 added_ms[mode].append(walls[mode] - walls["plain"])
@@ -466,6 +529,14 @@ def run_scene(name, opts, state, tmp):
         raise RuntimeError(f"scene {name}: no pixel reflects more than --threshold {opts['threshold']}")
     diffs = {"cycles": c, **{m: frames[m] - frames["plain"] for m in opts["methods"]}}
     added = {"cycles": float("nan"), **{m: statistics.median(v) for m, v in added_ms.items()}}
+    on_cycles = model_gap = None
+    if snapshot.get("glint"):
+        on_cycles = glint_on_cycles(cycles_frame - c, snapshot["glint"])
+        # The model against Blender's own composite, on the frame Blender had: how far
+        # the column can be trusted.
+        on_plain = glint_on_cycles(frames["plain"], snapshot["glint"])
+        model_gap = float(np.abs(on_plain[reflecting] - diffs["glint"][reflecting]).sum()
+                          / np.abs(c[reflecting]).sum())
     quiet = on & ~reflecting
     rows = []
     for method in methods:
@@ -497,10 +568,13 @@ def run_scene(name, opts, state, tmp):
         np.savez_compressed(os.path.join(opts["arrays"], f"{name}.npz"), reflecting=reflecting, on=on,
                             cycles_frame=cycles_frame, **{f"{m}_frame": frames[m] for m in modes},
                             **{f"{m}_diff": diffs[m] for m in methods},
+                            **({} if on_cycles is None else {"glint_on_cycles_diff": on_cycles}),
                             **{f"glint_{k}": np.asarray(state.arrays[k]) for k in ("uv", "weight", "hidden", "position",
                                                                                   "normal", "specular", "projection")
                                if k in state.arrays})
     info = dict(pixels=int(reflecting.sum()), surface=int(on.sum()), elsewhere=int(off.sum()),
+                on_cycles=None if on_cycles is None else figures(on_cycles, c, reflecting, off, quiet,
+                                                                 opts["threshold"])[:2], model_gap=model_gap,
                 noise=noise, plain_frame_error=frame_error(frames["plain"], cycles_frame, c, reflecting),
                 cycles_s=cycles_s, eevee_s=eevee_s, glint_stages=timings)
     return rows, info
@@ -533,12 +607,14 @@ def main():
         print(f"| {name} | {method} | {strength:.{k}f} | {error:.{k}f} | {frame_err:.{k}f} | {false_area:.3f} "
               f"| {change:.4f} | {negative} | {ms} |")
     print("\n| scene | reflecting pixels | surface pixels | pixels elsewhere | Cycles seed-to-seed error "
-          "| plain Eevee frame error | Cycles s | Eevee s | Glint stages ms |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---|")
+          "| plain Eevee frame error | Glint on Cycles' frame | model's gap | Cycles s | Eevee s | Glint stages ms |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for name, i in infos.items():
         stages = ", ".join(f"{k} {v:.0f}" for k, v in i["glint_stages"].items())
+        own = "-" if i["on_cycles"] is None else "{:.{k}f} / {:.{k}f}".format(*i["on_cycles"], k=k)
+        gap = "-" if i["model_gap"] is None else f"{i['model_gap']:.3f}"
         print(f"| {name} | {i['pixels']} | {i['surface']} | {i['elsewhere']} | {i['noise']:.3f} "
-              f"| {i['plain_frame_error']:.{k}f} | {i['cycles_s']:.0f} | {i['eevee_s']:.0f} | {stages} |")
+              f"| {i['plain_frame_error']:.{k}f} | {own} | {gap} | {i['cycles_s']:.0f} | {i['eevee_s']:.0f} | {stages} |")
 
 
 main()
