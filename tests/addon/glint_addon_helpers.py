@@ -8,8 +8,6 @@ import importlib.util
 import os
 import sys
 
-import pytest
-
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 ADDON = os.path.join(ROOT, "addon", "glint")
 
@@ -46,6 +44,7 @@ def build_python_dir():
 
 
 def core_module():
+    import pytest  # here, not at the top: bench/look_compare.py runs group_model.py inside Blender
     d = build_python_dir()
     if d is None:
         pytest.skip("no glint_core build (set GLINT_BUILD_DIR)")
