@@ -304,7 +304,7 @@ def cycles_pair(scene, meshes, seed, tmp):
 def eevee(scene, mode, tmp, state, stages, snapshot):
     """Renders with Eevee plain, with its own reflections, with Glint, or with both
     (``glint_own``); Glint's stage timings go into ``stages``, and after a
-    ``glint`` frame what :func:`glint_on_cycles` needs into ``snapshot``."""
+    ``glint`` frame what :func:`glint_model_change` needs into ``snapshot``."""
     glint = mode in ("glint", "glint_own")
     kit.use_eevee(scene, own_reflections=mode in ("ssr", "glint_own"))
     g = scene.glint
@@ -443,7 +443,7 @@ CYCLES_CODE = (_material, _diffuse, _add, _plane, _sun, _camera, _floor_scene, _
 
 
 def glint_snapshot(scene, state):
-    """What :func:`glint_on_cycles` needs of a Glint frame, taken just after it:
+    """What :func:`glint_model_change` needs of a Glint frame, taken just after it:
     Glint's layers, the Switches its group ran with and the world colour of S
     (None off the world colour's path: the passes' S has no Cycles counterpart)."""
     from glint import compositor
@@ -460,23 +460,17 @@ def glint_snapshot(scene, state):
     return dict(arrays=dict(state.arrays), switch=switch, colour=colour, soften=host_nodes.soften_is_a_filter())
 
 
-def glint_on_cycles(cycles_without, snap):
-    """Glint's change had the engine shaded as Cycles does (or on any other frame
-    given as ``cycles_without``): the add-on's compositor
-    group, as its numpy model runs it (tests/addon/group_model.py: Map UV as a
-    bilinear read, the blur levels as exact Gaussians), on Cycles' frame without
-    reflections instead of Eevee's plain frame, with Glint's layers of the last
-    frame it rendered and the Switches the group ran with. What is left of the
-    error then is Glint's own (its hits, weights, blur and bounce), not the base
-    frame's shading. ``snap``: :func:`glint_snapshot`'s. The model is this
-    checkout's, whatever --addon is."""
+def glint_model_change(frame, snap):
+    """Glint's change to ``frame``: the add-on's compositor group, as its numpy
+    model runs it (tests/addon/group_model.py: Map UV as a bilinear read, the
+    blur levels as exact Gaussians), with the layers and Switches of a Glint
+    frame (``snap``, :func:`glint_snapshot`'s). On Cycles' frame without
+    reflections, in place of Eevee's plain frame, what is left of the error is
+    Glint's own (its hits, weights, blur and bounce), not Eevee's shading. The
+    model is this checkout's, whatever --addon is."""
     sys.path.insert(0, os.path.join(ROOT, "tests", "addon"))
     import group_model as gm
-    from compositing_reference import bilinear_clamp, gauss_clamp
-
-    def map_uv(image, uv_rgba):
-        vis = uv_rgba[..., 2:3]
-        return np.where(vis > 0, bilinear_clamp(image, uv_rgba[..., 0], uv_rgba[..., 1]) * vis, 0).astype(np.float32)
+    from compositing_reference import gauss_clamp, map_uv
 
     cg = gm.cg
     uv, weight = (np.asarray(snap["arrays"][k], np.float32) for k in ("uv", "weight"))
@@ -488,7 +482,7 @@ def glint_on_cycles(cycles_without, snap):
               cg.IMAGE_HIDDEN: blank if hidden is None else np.asarray(hidden, np.float32),
               cg.IMAGE_DEBUG: blank, cg.IMAGE_POSITION: blank, cg.IMAGE_NORMAL: blank, cg.IMAGE_SPECULAR: blank,
               **cg.coarse_images(weight[..., 3], (0, 0, w, h), w, h)}
-    base = np.concatenate([cycles_without[..., :3], np.ones((h, w, 1))], axis=-1).astype(np.float32)
+    base = np.concatenate([frame[..., :3], np.ones((h, w, 1))], axis=-1).astype(np.float32)
     light = np.broadcast_to(np.array((*snap["colour"], 1.0), np.float32), base.shape).copy()
     out = gm.evaluate_group(base, images, map_uv, gauss_clamp, specular_light=light, world_specular=True,
                             use_blur=switch["use_blur"], use_bounce=switch["use_bounce"],
@@ -531,10 +525,10 @@ def run_scene(name, opts, state, tmp):
     added = {"cycles": float("nan"), **{m: statistics.median(v) for m, v in added_ms.items()}}
     on_cycles = model_gap = None
     if snapshot.get("glint"):
-        on_cycles = glint_on_cycles(cycles_frame - c, snapshot["glint"])
+        on_cycles = glint_model_change(cycles_frame - c, snapshot["glint"])
         # The model against Blender's own composite, on the frame Blender had: how far
         # the column can be trusted.
-        on_plain = glint_on_cycles(frames["plain"], snapshot["glint"])
+        on_plain = glint_model_change(frames["plain"], snapshot["glint"])
         model_gap = float(np.abs(on_plain[reflecting] - diffs["glint"][reflecting]).sum()
                           / np.abs(c[reflecting]).sum())
     quiet = on & ~reflecting

@@ -24,6 +24,13 @@ def bilinear_clamp(img, u, v):
     return bottom * (1 - ay) + top * ay
 
 
+def map_uv(image, uv_rgba):
+    """Map UV modelled as a bilinear clamp-to-edge lookup premultiplied by the third channel."""
+    vis = uv_rgba[..., 2:3]
+    c = bilinear_clamp(image, uv_rgba[..., 0], uv_rgba[..., 1]) * vis
+    return np.where(vis > 0, c, 0).astype(np.float32)
+
+
 def gauss_clamp(img, sigma):
     """A separable Gaussian, clamp to edge, cut at 4 sigma (float64)."""
     r = max(1, int(math.ceil(4 * sigma)))

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from compositing_reference import bilinear_clamp, bilinear_zero, blurred_at_lod, gauss_clamp
+from compositing_reference import map_uv as np_map_uv
 import group_model as gm
 from glint_addon_helpers import load_logic
 
@@ -130,13 +131,6 @@ def scene(h=12, w=16, seed=3):
     light = rng.uniform(0, 2, (h, w, 4)).astype(np.float32)
     colour = rng.uniform(0, 1, (h, w, 4)).astype(np.float32)
     return base, position, spec, uv, seen, weight, lod, light, colour
-
-
-def np_map_uv(image, uv_rgba):
-    """Map UV modelled as a bilinear clamp-to-edge lookup premultiplied by the third channel."""
-    vis = uv_rgba[..., 2:3]
-    c = bilinear_clamp(image, uv_rgba[..., 0], uv_rgba[..., 1]) * vis
-    return np.where(vis > 0, c, 0).astype(np.float32)
 
 
 def uv_image(uv, hidden=None):
