@@ -1,6 +1,7 @@
 #version 430 core
 // The reflection colour blurred by each pixel's GGX cone (docs/look-core.md):
-// footprint = 2 * |hit uv - pixel centre| in pixels * cone_tan(alpha), read
+// footprint = 2 * |hit uv - pixel centre| in pixels * cone_tan(alpha) (no
+// wider than a flat mirror's where u_bounded: glint::cone_lod_at()), read
 // trilinearly from the 2x2 box chain at lod = log2(footprint). Bilinear per
 // level is written out with texelFetch, as cpu/look.cpp does, so both
 // backends filter alike. Pixels whose footprint is within one texel, that do
@@ -13,6 +14,13 @@ uniform sampler2D u_chain;     // level 0 = the reflection colour
 uniform sampler2D u_uv;        // (u, v, visibility, visibility)
 uniform sampler2D u_specular;
 uniform int u_last;            // the chain's last level
+// The flat mirror's bound (glint::MirrorScale, cone_lod_at()), where u_bounded.
+uniform int u_bounded;
+uniform sampler2D u_position;
+uniform int u_eye_kind;        // 0 origin, 1 point, 2 direction (glint::EyeKind)
+uniform vec3 u_eye;
+uniform float u_pixels_per_unit;
+uniform vec4 u_w_row;          // the projection's last row: clip w
 
 layout(location = 0) out vec4 out_color;
 
@@ -39,6 +47,32 @@ vec4 bilinear(int level, vec2 uv) {
   return r;
 }
 
+// glint::mirror_footprint() in its operation order: 0 where unknown.
+float mirror_footprint(ivec2 px, vec4 t, float tan_c) {
+  ivec2 size = textureSize(u_position, 0);
+  vec4 p = texelFetch(u_position, px, 0);
+  int hx = int(floor(t.x * float(size.x)));
+  int hy = int(floor(t.y * float(size.y)));
+  hx = hx < 0 ? 0 : (hx >= size.x ? size.x - 1 : hx);
+  hy = hy < 0 ? 0 : (hy >= size.y ? size.y - 1 : hy);
+  vec4 q = texelFetch(u_position, ivec2(hx, hy), 0);
+  if (!(p.w > 0.0) || !(q.w > 0.0)) return 0.0;
+  precise float ex = q.x - p.x;
+  precise float ey = q.y - p.y;
+  precise float ez = q.z - p.z;
+  precise float tl = sqrt(ex * ex + ey * ey + ez * ez);
+  vec3 d = u_eye_kind == 0 ? p.xyz : (u_eye_kind == 1 ? p.xyz - u_eye : u_eye);
+  precise float dn = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+  if (!(dn > 0.0)) return 0.0;
+  precise float sc = tl / dn;
+  precise float vx = p.x + sc * d.x;
+  precise float vy = p.y + sc * d.y;
+  precise float vz = p.z + sc * d.z;
+  precise float cw = u_w_row.x * vx + u_w_row.y * vy + u_w_row.z * vz + u_w_row.w;
+  precise float f = 2.0 * tl * tan_c * (u_pixels_per_unit / cw);
+  return cw > 0.0 && finite_f(f) ? f : 0.0;
+}
+
 void main() {
   ivec2 px = pixel_coord();
   vec4 own = texelFetch(u_chain, px, 0);
@@ -53,7 +87,12 @@ void main() {
   vec2 centre = vec2(px) + 0.5;
   precise vec2 delta = t.xy * size - centre;
   precise float len = sqrt(delta.x * delta.x + delta.y * delta.y);
-  precise float footprint = 2.0 * len * look_cone_tan(alpha);
+  float tan_c = look_cone_tan(alpha);
+  precise float footprint = 2.0 * len * tan_c;
+  if (u_bounded != 0) {
+    float flat_fp = mirror_footprint(px, t, tan_c);
+    if (flat_fp > 0.0 && flat_fp < footprint) footprint = flat_fp;
+  }
   if (!(footprint > 1.0)) return;
   float lod = min(log2(footprint), float(u_last));
   int k0 = int(lod);

@@ -66,25 +66,53 @@ pyb::array_t<float> py_specular_weight(const pyb::handle& position, const pyb::h
   return array_from_image(std::move(r));
 }
 
+// The flat mirror's bound of the cone (glint::MirrorScale) from optional
+// position and projection arguments: both, or neither (no bound).
+struct OptionalMirror {
+  std::optional<Image> position;
+  MirrorScale scale;
+  // The scale's position pointer is set here, not when made: the struct is
+  // returned by value, and a pointer into it would then dangle.
+  const MirrorScale* get() {
+    if (!position) return nullptr;
+    scale.position = &*position;
+    return &scale;
+  }
+};
+
+OptionalMirror optional_mirror(const pyb::handle& position, const pyb::handle& projection) {
+  OptionalMirror m;
+  if (position.is_none() != projection.is_none())
+    throw InvalidArgument("position", "give position and projection together (the flat mirror's bound), or neither");
+  if (position.is_none()) return m;
+  m.position = image_from_array(position, "position", 1.0f, 4);
+  m.scale = mirror_scale(*m.position, projection_from_array(projection));
+  return m;
+}
+
 pyb::array_t<float> py_cone_blur(const pyb::handle& color, const pyb::handle& uv,
-                                 const pyb::handle& specular, const std::string& backend) {
+                                 const pyb::handle& specular, const pyb::handle& position,
+                                 const pyb::handle& projection, const std::string& backend) {
   Image c = image_from_array(color, "reflection_color", 0.0f, 4);
   Image u = image_from_array(uv, "uv", 0.0f, 4);
   Image s = image_from_array(specular, "specular", 0.0f, 4);
+  OptionalMirror m = optional_mirror(position, projection);
   auto be = get_backend(backend);
   pyb::gil_scoped_release release;
-  Image r = be->cone_blur(c, u, s);
+  Image r = be->cone_blur(c, u, s, m.get());
   pyb::gil_scoped_acquire acquire;
   return array_from_image(std::move(r));
 }
 
-pyb::array_t<float> py_cone_lod(const pyb::handle& uv, const pyb::handle& specular) {
+pyb::array_t<float> py_cone_lod(const pyb::handle& uv, const pyb::handle& specular, const pyb::handle& position,
+                                const pyb::handle& projection) {
   const Image u = image_from_array(uv, "uv", 0.0f, 4);
   const Image s = image_from_array(specular, "specular", 0.0f, 4);
+  OptionalMirror m = optional_mirror(position, projection);
   Image r;
   {
     pyb::gil_scoped_release release;
-    r = cone_lod(u, s);
+    r = cone_lod(u, s, m.get());
   }
   pyb::array_t<float> out({r.height, r.width});
   float* o = out.mutable_data();
@@ -137,13 +165,17 @@ void bind_stages(pyb::module_& m) {
         "Physical reflection weight: rgb = F0 * A + B (split-sum table at N.V and roughness),\n"
         "a = mean of the rgb; 0 where a pixel is unseen or does not reflect.");
   m.def("cone_blur", &py_cone_blur, "reflection_color"_a, "uv"_a, "specular"_a, pyb::kw_only(),
-        "backend"_a = kBackend,
+        "position"_a = pyb::none(), "projection"_a = pyb::none(), "backend"_a = kBackend,
         "The reflection colour blurred by each pixel's GGX cone: footprint 2 * ray length in\n"
-        "pixels * cone tan, read trilinearly from a 2x2 box mip chain.");
-  m.def("cone_lod", &py_cone_lod, "uv"_a, "specular"_a,
+        "pixels * cone tan, no wider than a flat mirror's when the G-buffer's position and the\n"
+        "projection are given, read trilinearly from a 2x2 box mip chain.");
+  m.def("cone_lod", &py_cone_lod, "uv"_a, "specular"_a, pyb::kw_only(), "position"_a = pyb::none(),
+        "projection"_a = pyb::none(),
         "[H, W] level of detail of the cone blur per pixel: log2(2 * ray length in pixels *\n"
-        "cone tan), 0 where that footprint is within a pixel, no hit was found or the pixel\n"
-        "is a mirror or does not reflect (the rule cone_blur applies).");
+        "cone tan), no wider than a flat mirror's footprint (2 * 3D ray length * cone tan, in the\n"
+        "pixels a view unit spans where the pixel's camera ray carried on by that length ends)\n"
+        "when position and projection are given; 0 where that footprint is within a pixel, no\n"
+        "hit was found or the pixel is a mirror or does not reflect (the rule cone_blur applies).");
   m.def("reflection", &py_reflection, "reflection_color"_a, "reflection_blur"_a, "specular"_a, pyb::kw_only(),
         "weight"_a = pyb::none(), "backend"_a = kBackend,
         "mix(colour, blurred, roughness) (the colour alone when reflection_blur is None) times\n"

@@ -479,11 +479,13 @@ CompositeLayers composite_layers(Backend& backend, const TraceInputs& in, const 
   out.weight = backend.specular_weight(in.position, in.normal, spec, in.projection);
   std::atomic<bool> rough{false};
   // The lod from the trace's own uv, before its misses are continued.
+  const MirrorScale mirror = mirror_scale(in.position, in.projection);
   parallel_rows(0, spec.height, threads, [&](int y) {
     bool any = false;
     for (int x = 0; x < spec.width; ++x) {
       const float* s = spec.px(x, y);
-      const float lod = is_reflective(s) ? cone_lod_at(x, y, spec.width, spec.height, out.uv.px(x, y), s) : 0.0f;
+      const float lod =
+          is_reflective(s) ? cone_lod_at(x, y, spec.width, spec.height, out.uv.px(x, y), s, &mirror) : 0.0f;
       out.weight.px(x, y)[3] = lod;
       any = any || lod > 0.0f;
     }

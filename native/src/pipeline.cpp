@@ -8,6 +8,7 @@
 #include "parallel.h"
 #include "glint/composite.h"
 #include "glint/errors.h"
+#include "glint/material.h"
 #include "glint/memory.h"
 
 namespace glint {
@@ -158,7 +159,8 @@ PipelineResult run_pipeline(Backend& backend, const PipelineInputs& in, const Pi
     res.timings.push_back({blur_stage, 0.0, true});
   } else {
     t0 = Clock::now();
-    blurred = box ? backend.box_blur(color, opt.blur, needs.box) : backend.cone_blur(color, uv, in.specular);
+    const MirrorScale mirror = mirror_scale(in.position, in.projection);
+    blurred = box ? backend.box_blur(color, opt.blur, needs.box) : backend.cone_blur(color, uv, in.specular, &mirror);
     res.timings.push_back({blur_stage, ms_since(t0), false});
   }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "glint/errors.h"
+#include "glint/material.h"
 #include "glint/marches.h"
 #include "glint/mesh.h"
 #include "glint/options.h"
@@ -71,10 +72,12 @@ void require_specular_weight_inputs(const Image& position, const Image& normal, 
   validate_projection(projection);
 }
 
-void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular) {
+void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular,
+                              const MirrorScale* mirror) {
   require_image(color, "reflection_color");
   require_same_size(color, "reflection_color", uv, "uv");
   require_same_size(color, "reflection_color", specular, "specular");
+  if (mirror && mirror->position) require_same_size(color, "reflection_color", *mirror->position, "position");
 }
 
 void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,

@@ -264,10 +264,10 @@ TEST(ConeBlur, ConstantStaysAndContactIsSharp) {
       s[3] = 0.2f;
     }
   auto cpu = make_cpu_backend(2);
-  Image out = cpu->cone_blur(col, uv, spec);
+  Image out = cpu->cone_blur(col, uv, spec, nullptr);
   for (size_t i = 0; i < out.data.size(); ++i) EXPECT_NEAR(out.data[i], col.data[i], 1e-6f);
   col.px(7, 5)[0] = 9.0f;  // x % 7 == 0: ray length 0
-  out = cpu->cone_blur(col, uv, spec);
+  out = cpu->cone_blur(col, uv, spec, nullptr);
   EXPECT_EQ(out.px(7, 5)[0], 9.0f);
 }
 

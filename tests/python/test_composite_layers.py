@@ -162,7 +162,7 @@ def test_layers_are_the_separate_calls_in_one(rough_floor, backend, request):
     assert np.array_equal(layers["uv"], want_uv)
     weight = glint_core.specular_weight(gb["position"], gb["normal"], spec, proj, backend=backend)
     assert np.array_equal(layers["weight"][..., :3], weight[..., :3])
-    lod = glint_core.cone_lod(uv, spec)
+    lod = glint_core.cone_lod(uv, spec, position=gb["position"], projection=proj)
     hits_lod = np.concatenate([weight[..., :3], lod[..., None]], axis=-1)
     assert np.array_equal(layers["weight"][..., 3], glint_core.continue_lod(hits_lod, uv, spec, gb["position"])[..., 3])
     assert (layers["weight"][..., 3] > lod).any()

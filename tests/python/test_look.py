@@ -273,6 +273,78 @@ def test_contact_and_smooth_pixels_keep_their_colour():
     assert glint_core.cone_blur(col, uv, spec).tobytes() == col.tobytes()
 
 
+def flat_mirror_frame(kind, hit_depth, w=40, h=24, depth=5.0):
+    """A w x h frame whose left half lies on the plane z = -depth in front of a
+    `kind` camera and reflects, each pixel's hit half the frame to its right, on the
+    plane z = -hit_depth that the right half shows."""
+    offset_px = w // 2
+    proj = A.projection_matrix(kind, w, h)
+    inv = np.linalg.inv(proj)
+    yy, xx = np.mgrid[0:h, 0:w]
+
+    def on_plane(px, py, z):
+        ndc = np.stack([(px + 0.5) / w * 2 - 1, (py + 0.5) / h * 2 - 1], -1)
+        near = np.concatenate([ndc, -np.ones(ndc.shape[:-1] + (1,)), np.ones(ndc.shape[:-1] + (1,))], -1) @ inv.T
+        far = np.concatenate([ndc, np.ones(ndc.shape[:-1] + (1,)), np.ones(ndc.shape[:-1] + (1,))], -1) @ inv.T
+        a, b = near[..., :3] / near[..., 3:], far[..., :3] / far[..., 3:]
+        return a + (b - a) * ((-z - a[..., 2]) / (b[..., 2] - a[..., 2]))[..., None]
+
+    pos = np.ones((h, w, 4))
+    left = xx < offset_px
+    pos[..., :3] = np.where(left[..., None], on_plane(xx, yy, depth), on_plane(xx, yy, hit_depth))
+    uv, spec = cone_inputs(h, w, offset_px, 0.3)
+    uv[~left, 2] = 0.0
+    return pos.astype(np.float32), proj, uv, spec
+
+
+def flat_mirror_lod(pos, proj, uv, spec, kind):
+    """The bound by hand, in float64: the hit's 3D distance t, the pixel's camera ray
+    carried on by t, and the pixels a view unit spans there (h/2 |P11| / clip w)."""
+    h, w = uv.shape[:2]
+    a = ggx_alpha(0.3)
+    tan = 2 * a / (1 - a * a)
+    yy, xx = np.mgrid[0:h, 0:w]
+    hx = np.clip(np.floor(uv[..., 0] * w).astype(int), 0, w - 1)
+    hy = np.clip(np.floor(uv[..., 1] * h).astype(int), 0, h - 1)
+    p = pos[..., :3].astype(np.float64)
+    q = p[hy, hx]
+    t = np.linalg.norm(q - p, axis=-1)
+    d = p / np.linalg.norm(p, axis=-1, keepdims=True) if kind == "persp" else np.array([0.0, 0.0, -1.0])
+    v = p + t[..., None] * d
+    clip_w = v @ proj[3, :3] + proj[3, 3]
+    flat = 2 * t * tan * (h / 2 * abs(proj[1, 1])) / clip_w
+    screen = 2 * np.hypot(uv[..., 0] * w - (xx + 0.5), uv[..., 1] * h - (yy + 0.5)) * tan
+    fp = np.minimum(flat, screen)
+    return np.where((uv[..., 2] > 0) & (fp > 1), np.log2(np.maximum(fp, 1)), 0.0)
+
+
+@pytest.mark.parametrize("kind, hit_depth, binds", [("persp", 5.0, True), ("persp", 60.0, False),
+                                                   ("ortho", 5.0, False), ("ortho", 2.0, False)])
+def test_cone_lod_is_no_wider_than_a_flat_mirrors(kind, hit_depth, binds):
+    """With the positions and the projection, the footprint is at most a flat mirror's
+    (docs/look-core.md, *No wider than a flat mirror*): a perspective mirror whose hits
+    lie beside it on its own plane shows them smaller than their screen distance, one
+    whose hits are far behind does not. Under an orthographic camera a view unit spans
+    the same pixels everywhere and a segment's screen length is at most its 3D length,
+    so the bound never binds."""
+    pos, proj, uv, spec = flat_mirror_frame(kind, hit_depth)
+    plain = glint_core.cone_lod(uv, spec)
+    got = glint_core.cone_lod(uv, spec, position=pos, projection=proj)
+    np.testing.assert_allclose(got, flat_mirror_lod(pos, proj, uv, spec, kind), atol=1e-4)
+    hits = uv[..., 2] > 0
+    assert (got <= plain + 1e-6).all()
+    assert (got[hits] < plain[hits] - 0.05).all() if binds else np.allclose(got, plain, atol=1e-4)
+    # The cone blur reads the same rule: narrower where it binds, the same elsewhere.
+    col = np.random.default_rng(3).uniform(0, 1, uv.shape).astype(np.float32)
+    bounded = glint_core.cone_blur(col, uv, spec, position=pos, projection=proj)
+    unbounded = glint_core.cone_blur(col, uv, spec)
+    assert (not np.allclose(bounded, unbounded, atol=1e-6)) is binds
+    with pytest.raises(ValueError, match="position"):
+        glint_core.cone_lod(uv, spec, position=pos)
+    with pytest.raises(ValueError, match="position"):
+        glint_core.cone_lod(uv, spec, position=pos[:, :-1], projection=proj)
+
+
 @pytest.mark.parametrize("shininess_alpha", [0.3, 2.44])  # the book's range, the gloss range
 @pytest.mark.parametrize("lod", [0.25, 1.0, 3.5, 6.0])
 def test_cone_lod_is_log2_of_the_footprint(lod, shininess_alpha):

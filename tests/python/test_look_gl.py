@@ -38,6 +38,9 @@ def test_stages_agree(gl, kind):
     rc, uv, spec = out["reflection_color"], out["uv"], gb["specular"]
     cone = gl.cone_blur(rc, uv, spec, backend="cpu")
     agree(f"{kind} cone_blur", cone, gl.cone_blur(rc, uv, spec, backend="gl"))
+    mirror = dict(position=gb["position"], projection=gb["projection"])  # the flat mirror's bound
+    agree(f"{kind} cone_blur, bounded", gl.cone_blur(rc, uv, spec, **mirror, backend="cpu"),
+          gl.cone_blur(rc, uv, spec, **mirror, backend="gl"))
     r = gl.reflection(cone, None, spec, weight=w_cpu, backend="cpu")
     agree(f"{kind} reflection", r, gl.reflection(cone, None, spec, weight=w_cpu, backend="gl"))
     sb = (gb["color"][..., :3] * 0.2).astype(np.float32)
@@ -56,6 +59,17 @@ def test_cone_blur_agrees_with_per_pixel_levels(gl):
     spec = rng.uniform(0, 1, (h, w, 4)).astype(np.float32)
     agree("cone_blur random levels", gl.cone_blur(col, uv, spec, backend="cpu"),
           gl.cone_blur(col, uv, spec, backend="gl"))
+    # Random positions in front of a perspective camera: the flat mirror's bound
+    # binds on some pixels and not on others, and a few texels are unseen.
+    pos = np.ones((h, w, 4), np.float32)
+    pos[..., :2] = rng.uniform(-3, 3, (h, w, 2))
+    pos[..., 2] = rng.uniform(-40, -1, (h, w))
+    pos[..., 3] = rng.uniform(0, 1, (h, w)) > 0.05
+    proj = A.projection_matrix("persp", w, h)
+    bounded = gl.cone_blur(col, uv, spec, position=pos, projection=proj, backend="cpu")
+    assert not np.array_equal(bounded, gl.cone_blur(col, uv, spec, backend="cpu"))
+    agree("cone_blur random levels, bounded", bounded,
+          gl.cone_blur(col, uv, spec, position=pos, projection=proj, backend="gl"))
 
 
 @pytest.mark.parametrize("alpha", [1.0, 0.3])

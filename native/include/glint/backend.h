@@ -28,6 +28,8 @@ namespace glint {
 // report (0, 0, 0, 0); without one every seen pixel is traced.
 struct TriangleMesh;  // glint/mesh.h
 
+struct MirrorScale;  // glint/material.h
+
 struct TraceInputs {
   const Image& position;
   const Image& normal;
@@ -63,10 +65,12 @@ class Backend {
   virtual Image specular_weight(const Image& position, const Image& normal, const Image& specular,
                                 const Mat4& projection) = 0;
   // The reflection colour blurred by each pixel's GGX cone: a footprint of
-  // 2 * ray length in pixels (|uv - pixel centre|) * cone_tan(alpha), read
+  // 2 * ray length in pixels (|uv - pixel centre|) * cone_tan(alpha), no
+  // wider than a flat mirror's where `mirror` is given (cone_lod_at()), read
   // trilinearly from a 2x2 box mip chain of `color` (all four channels).
   // Pixels with alpha 0, zero visibility or no reflection keep their colour.
-  virtual Image cone_blur(const Image& color, const Image& uv, const Image& specular) = 0;
+  virtual Image cone_blur(const Image& color, const Image& uv, const Image& specular,
+                          const MirrorScale* mirror) = 0;
   // mix(color, *blurred, roughness) (just `color` when blurred is null: a cone
   // blur already holds the roughness) times the weight: weight->rgb on the
   // colour and weight->a on the alpha, or the seed's specular amount on all

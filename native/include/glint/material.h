@@ -8,6 +8,7 @@
 
 #include "glint/brdf.h"
 #include "glint/image.h"
+#include "glint/projection.h"
 #include "glint/schema.h"
 
 namespace glint {
@@ -62,18 +63,66 @@ inline float cone_tan(float alpha) {
   const float t = 2.0f * alpha;
   return d * kMaxConeTan > t ? t / d : kMaxConeTan;
 }
+// What bounds the cone's footprint by a flat mirror's (docs/look-core.md, "No
+// wider than a flat mirror"): the G-buffer's view positions and the camera.
+// A flat mirror at view point p shows a hit t away where p's own camera ray,
+// carried on by t, would be; a cone 2 t tan across there spans 2 t tan times
+// the pixels a view unit covers at that point. The screen distance to the hit
+// can make the footprint larger than that (a convex mirror shows its hits
+// smaller than a flat one; so does a hit far across the screen but far from
+// the camera), never rightly so. mirror_scale() fills it from a projection.
+struct MirrorScale {
+  const Image* position = nullptr;  // null: the footprint is not bounded
+  CameraEye eye;
+  float pixels_per_unit = 0.0f;  // (height / 2) |P(1, 1)|: pixels per view unit where clip w = 1
+  float w_row[4] = {0.0f, 0.0f, 0.0f, 0.0f};  // P's last row: clip w of a view point
+};
+MirrorScale mirror_scale(const Image& position, const Mat4& projection);
+
+// The flat mirror's footprint at pixel (x, y) whose hit is at `uv`, 0 where it
+// is not known (either texel unseen, or the carried point not in front).
+inline float mirror_footprint(int x, int y, const float* uv, float tan_c, const MirrorScale& m) {
+  const Image& pos = *m.position;
+  const float* p = pos.px(x, y);
+  int hx = static_cast<int>(std::floor(uv[0] * static_cast<float>(pos.width)));
+  int hy = static_cast<int>(std::floor(uv[1] * static_cast<float>(pos.height)));
+  hx = hx < 0 ? 0 : (hx >= pos.width ? pos.width - 1 : hx);
+  hy = hy < 0 ? 0 : (hy >= pos.height ? pos.height - 1 : hy);
+  const float* q = pos.px(hx, hy);
+  if (!(p[3] > 0.0f) || !(q[3] > 0.0f)) return 0.0f;
+  const float ex = q[0] - p[0], ey = q[1] - p[1], ez = q[2] - p[2];
+  const float t = std::sqrt(ex * ex + ey * ey + ez * ez);
+  float d[3];
+  incident_toward(m.eye, p, d);
+  const float dn = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (!(dn > 0.0f)) return 0.0f;
+  const float s = t / dn;
+  const float vx = p[0] + s * d[0], vy = p[1] + s * d[1], vz = p[2] + s * d[2];
+  const float cw = m.w_row[0] * vx + m.w_row[1] * vy + m.w_row[2] * vz + m.w_row[3];
+  const float f = 2.0f * t * tan_c * (m.pixels_per_unit / cw);
+  return cw > 0.0f && f - f == 0.0f ? f : 0.0f;
+}
+
 // The cone blur's level of detail at pixel (x, y) of a w x h image: log2 of
-// the footprint 2 * |hit uv - pixel centre| (pixels) * cone_tan(alpha), 0
-// where the footprint is within one pixel or the pixel reports no hit (vis
-// uv[2] <= 0) or is a mirror. `uv` and `spec` are that pixel's texels. Both
-// backends' cone blur and the add-on's compositor blur read this one rule.
-inline float cone_lod_at(int x, int y, int w, int h, const float* uv, const float* spec) {
+// the footprint 2 * |hit uv - pixel centre| (pixels) * cone_tan(alpha), no
+// wider than a flat mirror's where `mirror` is given and knows it, 0 where
+// the footprint is within one pixel or the pixel reports no hit (vis uv[2]
+// <= 0) or is a mirror. `uv` and `spec` are that pixel's texels. Both
+// backends' cone blur and the add-on's compositor blur read this one rule;
+// the trace's outline search asks it without `mirror` (docs/look-core.md).
+inline float cone_lod_at(int x, int y, int w, int h, const float* uv, const float* spec,
+                         const MirrorScale* mirror = nullptr) {
   if (!(uv[2] > 0.0f) || !(uv[0] - uv[0] == 0.0f) || !(uv[1] - uv[1] == 0.0f)) return 0.0f;
   const float alpha = ggx_alpha_of(spec);
   if (!(alpha > 0.0f)) return 0.0f;
   const float dx = uv[0] * static_cast<float>(w) - (static_cast<float>(x) + 0.5f);
   const float dy = uv[1] * static_cast<float>(h) - (static_cast<float>(y) + 0.5f);
-  const float footprint = 2.0f * std::sqrt(dx * dx + dy * dy) * cone_tan(alpha);
+  const float tan_c = cone_tan(alpha);
+  float footprint = 2.0f * std::sqrt(dx * dx + dy * dy) * tan_c;
+  if (mirror && mirror->position) {
+    const float flat = mirror_footprint(x, y, uv, tan_c, *mirror);
+    if (flat > 0.0f && flat < footprint) footprint = flat;
+  }
   return footprint > 1.0f ? std::log2(footprint) : 0.0f;
 }
 // True when a position texel counts as "seen": w > 0 and every channel finite.
@@ -115,5 +164,5 @@ float shininess_to_alpha(float shininess);
 // Each pixel's cone_lod_at() as a one-channel image in r (g, b, a zero):
 // what a compositor outside the core needs to blur a reflection it samples
 // itself the way cone_blur would. Checks its inputs as cone_blur does.
-Image cone_lod(const Image& uv, const Image& specular);
+Image cone_lod(const Image& uv, const Image& specular, const MirrorScale* mirror = nullptr);
 }  // namespace glint

@@ -17,7 +17,8 @@ void require_trace_inputs(const TraceInputs& in, const TraceOptions& opt);
 // What Backend::specular_weight and Backend::cone_blur check, on every backend.
 void require_specular_weight_inputs(const Image& position, const Image& normal, const Image& specular,
                                     const Mat4& projection);
-void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular);
+void require_cone_blur_inputs(const Image& color, const Image& uv, const Image& specular,
+                              const MirrorScale* mirror);
 
 // The checks every backend's reflection / combine make before they run.
 void require_reflection_inputs(const Image& color, const Image* blurred, const Image& specular,

@@ -219,9 +219,10 @@ class CpuBackend final : public Backend {
     return cpu::specular_weight(position, normal, specular, projection, threads_);
   }
 
-  Image cone_blur(const Image& color, const Image& uv, const Image& specular) override {
-    require_cone_blur_inputs(color, uv, specular);
-    return cpu::cone_blur(color, uv, specular, threads_);
+  Image cone_blur(const Image& color, const Image& uv, const Image& specular,
+                  const MirrorScale* mirror) override {
+    require_cone_blur_inputs(color, uv, specular, mirror);
+    return cpu::cone_blur(color, uv, specular, mirror, threads_);
   }
 
   Image reflection(const Image& color, const Image* blurred, const Image& specular,

@@ -87,7 +87,8 @@ Image specular_weight(const Image& position, const Image& normal, const Image& s
   return out;
 }
 
-Image cone_blur(const Image& color, const Image& uv, const Image& specular, int threads) {
+Image cone_blur(const Image& color, const Image& uv, const Image& specular, const MirrorScale* mirror,
+                int threads) {
   // Level 0 is `color` itself; the levels above are built here.
   std::vector<Image> above;
   std::vector<const Image*> chain{&color};
@@ -105,7 +106,7 @@ Image cone_blur(const Image& color, const Image& uv, const Image& specular, int 
       const float* s = specular.px(x, y);
       const float* t = uv.px(x, y);
       if (!is_reflective(s)) continue;
-      const float full = cone_lod_at(x, y, out.width, out.height, t, s);
+      const float full = cone_lod_at(x, y, out.width, out.height, t, s, mirror);
       if (!(full > 0.0f)) continue;  // within one texel: the colour itself
       const float cx = static_cast<float>(x) + 0.5f, cy = static_cast<float>(y) + 0.5f;
       const float lod = std::min(full, static_cast<float>(last));

@@ -2,6 +2,7 @@
 // blur (Backend::specular_weight, Backend::cone_blur; docs/look-core.md).
 #pragma once
 #include "glint/image.h"
+#include "glint/material.h"
 #include "glint/projection.h"
 
 namespace glint::cpu {
@@ -9,6 +10,7 @@ namespace glint::cpu {
 Image specular_weight(const Image& position, const Image& normal, const Image& specular,
                       const Mat4& projection, int threads);
 
-Image cone_blur(const Image& color, const Image& uv, const Image& specular, int threads);
+Image cone_blur(const Image& color, const Image& uv, const Image& specular, const MirrorScale* mirror,
+                int threads);
 
 }  // namespace glint::cpu

@@ -57,6 +57,7 @@ namespace glint::gl {
   X(PFNGLUNIFORM2FPROC, Uniform2f)                                     \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                                     \
   X(PFNGLUNIFORM4IPROC, Uniform4i)                                     \
+  X(PFNGLUNIFORM4FPROC, Uniform4f)                                     \
   X(PFNGLUNIFORM1FVPROC, Uniform1fv)                                   \
   X(PFNGLUNIFORM1DVPROC, Uniform1dv)                                   \
   X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                         \

@@ -86,10 +86,11 @@ class GlBackend final : public Backend {
     return out;
   }
 
-  Image cone_blur(const Image& color, const Image& uv, const Image& specular) override {
-    require_cone_blur_inputs(color, uv, specular);
+  Image cone_blur(const Image& color, const Image& uv, const Image& specular,
+                  const MirrorScale* mirror) override {
+    require_cone_blur_inputs(color, uv, specular, mirror);
     Image out;
-    worker_.run([&](GlState& s) { out = s.cone_blur(color, uv, specular); });
+    worker_.run([&](GlState& s) { out = s.cone_blur(color, uv, specular, mirror); });
     return out;
   }
 

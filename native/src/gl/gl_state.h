@@ -66,7 +66,7 @@ class GlState {
 
   // The reflection colour's 2x2 box chain, every level rendered on the GPU
   // from the one below (as the Hi-Z pyramid is), then one lookup pass.
-  Image cone_blur(const Image& color, const Image& uv, const Image& specular);
+  Image cone_blur(const Image& color, const Image& uv, const Image& specular, const MirrorScale* mirror);
 
   Image reflection(const Image& color, const Image* blurred, const Image& specular, const Image* weight);
 

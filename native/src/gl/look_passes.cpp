@@ -7,6 +7,7 @@
 #include "gl/gl_state.h"
 #include "glint/brdf.h"
 #include "glint/errors.h"
+#include "glint/material.h"
 
 namespace glint::gl {
 
@@ -48,7 +49,7 @@ Image GlState::specular_weight(const Image& position, const Image& normal, const
   return draw_and_read(position.width, position.height, "specular_weight", 4);
 }
 
-Image GlState::cone_blur(const Image& color, const Image& uv, const Image& specular) {
+Image GlState::cone_blur(const Image& color, const Image& uv, const Image& specular, const MirrorScale* mirror) {
   const int w = color.width, h = color.height;
   // The chain: an RGBA32F texture with every level, kept between frames.
   mip_target(cone_chain_, w, h, GL_RGBA32F, "cone_blur", 5, "the cone blur's chain");
@@ -74,6 +75,20 @@ Image GlState::cone_blur(const Image& color, const Image& uv, const Image& specu
   bind(prog, "u_uv", 1, t_uv, GL_NEAREST, GL_CLAMP_TO_EDGE);
   bind(prog, "u_specular", 2, t_spec, GL_NEAREST, GL_CLAMP_TO_EDGE);
   gl_.Uniform1i(loc(prog, "u_last"), cone_chain_.levels - 1);
+  // The flat mirror's bound (cone_lod_at()): the positions and the camera.
+  const bool bounded = mirror && mirror->position;
+  gl_.Uniform1i(loc(prog, "u_bounded"), bounded ? 1 : 0);
+  if (bounded) {
+    const Texture& t_pos = upload(kIn2, *mirror->position, "cone_blur", 5);
+    bind(prog, "u_position", 3, t_pos, GL_NEAREST, GL_CLAMP_TO_EDGE);
+    gl_.Uniform1i(loc(prog, "u_eye_kind"), static_cast<int>(mirror->eye.kind));
+    gl_.Uniform3f(loc(prog, "u_eye"), mirror->eye.eye[0], mirror->eye.eye[1], mirror->eye.eye[2]);
+    gl_.Uniform1f(loc(prog, "u_pixels_per_unit"), mirror->pixels_per_unit);
+    gl_.Uniform4f(loc(prog, "u_w_row"), mirror->w_row[0], mirror->w_row[1], mirror->w_row[2], mirror->w_row[3]);
+  } else {
+    // A sampler must name a texture unit of its own type even when unread.
+    bind(prog, "u_position", 3, t_uv, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  }
   return draw_and_read(w, h, "cone_blur", 5);
 }
 
