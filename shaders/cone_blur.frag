@@ -89,7 +89,7 @@ void main() {
   precise float len = sqrt(delta.x * delta.x + delta.y * delta.y);
   float tan_c = look_cone_tan(alpha);
   precise float footprint = 2.0 * len * tan_c;
-  if (u_bounded != 0) {
+  if (footprint > 1.0 && u_bounded != 0) {
     float flat_fp = mirror_footprint(px, t, tan_c);
     if (flat_fp > 0.0 && flat_fp < footprint) footprint = flat_fp;
   }

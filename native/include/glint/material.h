@@ -119,7 +119,8 @@ inline float cone_lod_at(int x, int y, int w, int h, const float* uv, const floa
   const float dy = uv[1] * static_cast<float>(h) - (static_cast<float>(y) + 0.5f);
   const float tan_c = cone_tan(alpha);
   float footprint = 2.0f * std::sqrt(dx * dx + dy * dy) * tan_c;
-  if (mirror && mirror->position) {
+  // The bound only narrows: a footprint already within a pixel needs none.
+  if (footprint > 1.0f && mirror && mirror->position) {
     const float flat = mirror_footprint(x, y, uv, tan_c, *mirror);
     if (flat > 0.0f && flat < footprint) footprint = flat;
   }
