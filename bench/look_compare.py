@@ -468,7 +468,9 @@ def glint_model_change(frame, snap):
     reflections, in place of Eevee's plain frame, what is left of the error is
     Glint's own (its hits, weights, blur and bounce), not Eevee's shading. The
     model is this checkout's, whatever --addon is."""
-    sys.path.insert(0, os.path.join(ROOT, "tests", "addon"))
+    models = os.path.join(ROOT, "tests", "addon")
+    if models not in sys.path:  # called twice a scene
+        sys.path.insert(0, models)
     import group_model as gm
     from compositing_reference import gauss_clamp, map_uv
 

@@ -51,6 +51,24 @@ float view_distance(vec3 v) { return -v.z; }
 // (non-finite values are data meaning "nothing seen").
 bool texel_seen(vec4 p) { return p.w > 0.0 && finite_v4(p); }
 
+// Image::texel_at() for an image of `size` texels: the texel q holding point
+// xy, in pixels; false off the image, NaN included. The bounds are checked on
+// the floats, before converting: int() of a float beyond int's range is
+// undefined.
+bool texel_in(vec2 xy, vec2 size, out ivec2 q) {
+  precise vec2 f = floor(xy);
+  q = ivec2(0);
+  if (!(f.x >= 0.0 && f.y >= 0.0 && f.x < size.x && f.y < size.y)) return false;
+  q = ivec2(f);
+  return true;
+}
+
+// glint::incident_toward(): the incident direction toward view point p,
+// unnormalised, by the camera eye's kind (0 origin, 1 point, 2 direction).
+vec3 incident_toward(int eye_kind, vec3 eye, vec3 p) {
+  return eye_kind == 0 ? p : (eye_kind == 1 ? p - eye : eye);
+}
+
 // The seed's specular amount: the mean of the specular rgb.
 float specular_amount(vec4 s) {
   precise float amount = (s.r + s.g + s.b) / 3.0;

@@ -49,19 +49,17 @@ vec4 bilinear(int level, vec2 uv) {
 
 // glint::mirror_footprint() in its operation order: 0 where unknown.
 float mirror_footprint(ivec2 px, vec4 t, float tan_c) {
-  ivec2 size = textureSize(u_position, 0);
+  vec2 size = vec2(textureSize(u_position, 0));
   vec4 p = texelFetch(u_position, px, 0);
-  int hx = int(floor(t.x * float(size.x)));
-  int hy = int(floor(t.y * float(size.y)));
-  hx = hx < 0 ? 0 : (hx >= size.x ? size.x - 1 : hx);
-  hy = hy < 0 ? 0 : (hy >= size.y ? size.y - 1 : hy);
-  vec4 q = texelFetch(u_position, ivec2(hx, hy), 0);
+  ivec2 h;
+  if (!texel_in(t.xy * size, size, h)) return 0.0;
+  vec4 q = texelFetch(u_position, h, 0);
   if (!(p.w > 0.0) || !(q.w > 0.0)) return 0.0;
   precise float ex = q.x - p.x;
   precise float ey = q.y - p.y;
   precise float ez = q.z - p.z;
   precise float tl = sqrt(ex * ex + ey * ey + ez * ez);
-  vec3 d = u_eye_kind == 0 ? p.xyz : (u_eye_kind == 1 ? p.xyz - u_eye : u_eye);
+  vec3 d = incident_toward(u_eye_kind, u_eye, p.xyz);
   precise float dn = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
   if (!(dn > 0.0)) return 0.0;
   precise float sc = tl / dn;

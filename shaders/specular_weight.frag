@@ -45,7 +45,7 @@ void main() {
   if (!finite_v3(n)) return;
   precise float nn = dot3(n, n);
   if (nn == 0.0) return;
-  vec3 d = u_eye_kind == 0 ? p.xyz : (u_eye_kind == 1 ? p.xyz - u_eye : u_eye);
+  vec3 d = incident_toward(u_eye_kind, u_eye, p.xyz);
   precise float dd = dot3(d, d);
   if (!(dd > 0.0) || !finite_f(dd)) return;
   precise float inv_n = 1.0 / sqrt(nn);

@@ -40,16 +40,8 @@ double near_value(dvec3 v) {
   return r;
 }
 
-// Image::texel_at(): the texel q holding point xy, in pixels; false off the
-// image, NaN included. The bounds are checked on the floats, before
-// converting: int() of a float beyond int's range is undefined.
-bool texel_at(vec2 xy, out ivec2 q) {
-  precise vec2 f = floor(xy);
-  q = ivec2(0);
-  if (!(f.x >= 0.0 && f.y >= 0.0 && f.x < u_size.x && f.y < u_size.y)) return false;
-  q = ivec2(f);
-  return true;
-}
+// Image::texel_at() on the frame (common.glsl's texel_in()).
+bool texel_at(vec2 xy, out ivec2 q) { return texel_in(xy, u_size, q); }
 
 // Fix 3 (docs/conventions.md): the nearest texel at floor(uv * size); off the image or on an
 // unseen texel is a miss, and a miss reads as (0, 0, 0, 0).

@@ -80,14 +80,14 @@ struct MirrorScale {
 MirrorScale mirror_scale(const Image& position, const Mat4& projection);
 
 // The flat mirror's footprint at pixel (x, y) whose hit is at `uv`, 0 where it
-// is not known (either texel unseen, or the carried point not in front).
+// is not known (the hit off the image, either texel unseen, or the carried
+// point not in front).
 inline float mirror_footprint(int x, int y, const float* uv, float tan_c, const MirrorScale& m) {
   const Image& pos = *m.position;
   const float* p = pos.px(x, y);
-  int hx = static_cast<int>(std::floor(uv[0] * static_cast<float>(pos.width)));
-  int hy = static_cast<int>(std::floor(uv[1] * static_cast<float>(pos.height)));
-  hx = hx < 0 ? 0 : (hx >= pos.width ? pos.width - 1 : hx);
-  hy = hy < 0 ? 0 : (hy >= pos.height ? pos.height - 1 : hy);
+  int hx = 0, hy = 0;
+  if (!pos.texel_at(uv[0] * static_cast<float>(pos.width), uv[1] * static_cast<float>(pos.height), hx, hy))
+    return 0.0f;
   const float* q = pos.px(hx, hy);
   if (!(p[3] > 0.0f) || !(q[3] > 0.0f)) return 0.0f;
   const float ex = q[0] - p[0], ey = q[1] - p[1], ez = q[2] - p[2];
