@@ -339,6 +339,11 @@ def test_cone_lod_is_no_wider_than_a_flat_mirrors(kind, hit_depth, binds):
     bounded = glint_core.cone_blur(col, uv, spec, position=pos, projection=proj)
     unbounded = glint_core.cone_blur(col, uv, spec)
     assert (not np.allclose(bounded, unbounded, atol=1e-6)) is binds
+    # A hit off the image (any uv cone_lod() is given) has no texel to bound by.
+    off = uv.copy()
+    off[..., 0] = np.where(hits, 1e30, off[..., 0])
+    np.testing.assert_array_equal(glint_core.cone_lod(off, spec, position=pos, projection=proj),
+                                  glint_core.cone_lod(off, spec))
     with pytest.raises(ValueError, match="position"):
         glint_core.cone_lod(uv, spec, position=pos)
     with pytest.raises(ValueError, match="position"):
