@@ -23,7 +23,7 @@ bl_info = {
 RELOAD_ORDER = (
     "logic", "logic.schema", "logic.texels", "logic.materials", "logic.projection", "logic.frustum", "logic.settings",
     "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement",
-    "logic.compositing", "host", "host.engines", "host.nodes", "host.data", "native", "state",
+    "logic.compositing", "host", "host.engines", "host.nodes", "host.data", "host.writes", "native", "state",
     "gather", "compositor", "exact_cache", "frame", "measure", "properties", "preferences", "operators",
     "ui", "handlers")
 if "bpy" in locals():

@@ -36,7 +36,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import compositor, frame, host, native
-from .host import engines
+from .host import engines, writes
 from .state import STATE, FrameReport, log
 
 
@@ -278,7 +278,9 @@ def _run_queue(q) -> None:
         except queue.Empty:
             break
         try:
-            fn()
+            # Through a property update: Blender may have left Python's writes
+            # refused after the render (host/writes.py).
+            writes.run(fn)
         except Exception:
             traceback.print_exc()
 
@@ -343,6 +345,7 @@ HANDLERS = (
 
 
 def register():
+    writes.register()
     for name, fn in HANDLERS:
         lst = getattr(bpy.app.handlers, name)
         if fn not in lst:
@@ -359,3 +362,4 @@ def unregister():
     if bpy.app.timers.is_registered(_main_thread_tick):
         bpy.app.timers.unregister(_main_thread_tick)
     native.release_buffers(idle_only=False)
+    writes.unregister()

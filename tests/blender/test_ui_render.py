@@ -142,6 +142,11 @@ def assert_panel_showed(render, status):
     assert any(d["t"] >= end and d["status"] == status for d in render["panel_draws"]), render["panel_draws"]
 
 
+def skip_unless_left_read_only(render):
+    if not render["read_only"]:
+        pytest.skip("this Blender keeps the read-only flag per thread: two threads' callbacks cannot leave it set")
+
+
 TICK_AND_RENDER = [{"python": "scene.glint.enabled = False"}, {"python": "scene.glint.enabled = True"}]
 
 
@@ -163,6 +168,22 @@ def test_f12_composites_reflections(xvfb, blender, samples, tmp_path, sample, en
     assert not res["info_reports"], res["info_reports"]
 
 
+def test_f12_composites_reflections_in_a_blender_left_read_only(xvfb, blender, samples, tmp_path):
+    """Callbacks on two threads can leave Blender refusing Python's writes for the
+    rest of the session (docs/addon.md, *Writes Blender refuses*); a
+    render after that still gets its reflections: what Glint writes during a
+    render is not refused by that state."""
+    out = str(tmp_path / "read_only")
+    renders = [TICK_AND_RENDER[0], dict(TICK_AND_RENDER[1], read_only=True)]
+    res, log = run_ui(blender, samples["mirror_floor"], out, {"renders": renders, "mirror_objects": MIRROR_OBJECTS})
+    off_render, on_render = res["renders"]
+    skip_unless_left_read_only(on_render)
+    assert on_render["writes_refused"] >= 2, on_render  # the F12, the screenshots
+    assert on_render["glint"]["status"] == "ok", on_render["glint"]
+    assert "Glint: frame 1: reflections composited" in log
+    assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
+
+
 def test_f12_in_cycles_leaves_its_true_reflections_alone(xvfb, blender, samples, tmp_path):
     """Cycles path-traces its reflections: ticking Glint changes nothing and says why."""
     out = str(tmp_path / "cycles")
@@ -175,7 +196,10 @@ def test_f12_in_cycles_leaves_its_true_reflections_alone(xvfb, blender, samples,
     assert not res["info_reports"], res["info_reports"]
 
 
-def test_f12_without_native_module_reports_and_renders_the_plain_frame(xvfb, samples, tmp_path):
+@pytest.mark.parametrize("read_only", [False, True], ids=["writable", "read_only"])
+def test_f12_without_native_module_reports_and_renders_the_plain_frame(xvfb, samples, tmp_path, read_only):
+    """The report reaches the Info log even where Blender has left Python's
+    writes and operator calls refused (host/writes.py)."""
     b = Blender(str(tmp_path / "home"), core_path=False, link_addon=False)
     # A plain copy (not a symlink into the checkout, which would find the build).
     shutil.copytree(os.path.join(ROOT, "addon", "glint"), os.path.join(b.scripts, "addons", "glint"),
@@ -184,8 +208,11 @@ def test_f12_without_native_module_reports_and_renders_the_plain_frame(xvfb, sam
     empty.mkdir()
     b.env["GLINT_CORE_PATH"] = str(empty)
     out = str(tmp_path / "out")
-    res, log = run_ui(b, samples["mirror_floor"], out, {"renders": TICK_AND_RENDER})
+    renders = [TICK_AND_RENDER[0], dict(TICK_AND_RENDER[1], read_only=read_only)]
+    res, log = run_ui(b, samples["mirror_floor"], out, {"renders": renders})
     on_render = res["renders"][1]
+    if read_only:
+        skip_unless_left_read_only(on_render)
     assert_f12_ran_on_the_render_thread(on_render)
     assert on_render["glint"]["status"] == "error"
     assert "the native module glint_core was not found" in on_render["glint"]["message"]

@@ -13,6 +13,9 @@ timeout (seconds per render), renders: a list of steps, one F12 each, with keys
                     drawn the export's progress; "drawn", once it has drawn the button
   check             a Python expression evaluated after the render, its value recorded
   animation         render the frame range (Ctrl F12) instead of one frame
+  read_only         before the F12, leave Blender's Python read-only for good, the way
+                    interleaved callbacks on two threads can (_leave_read_only); the
+                    render's "read_only" says whether it could
 
 F12 is ``render.render('INVOKE_DEFAULT')`` from a timer in the main window's
 context: the render runs as a job on its own thread and opens the render window,
@@ -45,9 +48,7 @@ scene_config.apply(scene, cfg)
 r = scene.render
 exec(cfg.get("python", ""))
 # The Render Result is saved in the scene's format, set here once, so that
-# collecting a render writes nothing to the scene: right after a render Blender
-# may refuse Python's writes to ID data (_writes_allowed), and the frame is then
-# saved before the driver waits that out.
+# collecting a render writes nothing to the scene.
 r.image_settings.file_format, r.image_settings.color_depth = "OPEN_EXR", "32"
 
 T0 = time.monotonic()
@@ -215,9 +216,10 @@ def _writes_allowed():
     """Whether Python may write to ID data, and call operators, at this moment.
     Blender forbids both while a read-only Python callback runs (a panel's draw,
     a Python render engine's method such as Cycles'), with one process-wide flag
-    that each callback saves, sets and restores: callbacks on the render thread
-    and the main thread can interleave so that it stays set after a render.
-    Tried with a write of the value already there."""
+    that each callback saves, sets and restores. Callbacks on the render thread
+    and the main thread interleave (the GIL changes hands between them), so the
+    flag can stay set after a render, for good: a timer, which is no callback of
+    that kind, never sees it cleared. Tried with a write of the value already there."""
     try:
         r.image_settings.file_format = r.image_settings.file_format
     except AttributeError as exc:
@@ -225,6 +227,105 @@ def _writes_allowed():
             return False
         raise
     return True
+
+
+# A property update callback runs with writes allowed whatever the flag says,
+# and a property of the window manager may be written while the flag is set:
+# the driver's steps go through one when Blender refuses them (docs/addon.md,
+# *Writes Blender refuses*).
+_through = {}
+
+
+def _run_through_update(self, context):
+    try:
+        _through["value"] = _through["fn"]()
+    except BaseException as exc:  # re-raised in the timer, out of Blender's reach
+        _through["error"] = exc
+
+
+bpy.types.WindowManager.glint_test_through = bpy.props.BoolProperty(update=_run_through_update)
+
+
+def _with_writes(fn):
+    """fn(), where it may write to the scene and call operators."""
+    if _writes_allowed():
+        return fn()
+    _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
+    _through.clear()
+    _through["fn"] = fn
+    wm = bpy.context.window_manager
+    wm.glint_test_through = not wm.glint_test_through
+    if "error" in _through:
+        raise _through["error"]
+    if "value" not in _through:
+        raise RuntimeError("the window manager's update callback did not run")
+    return _through["value"]
+
+
+class GLINT_TEST_OT_read_only(bpy.types.Operator):
+    """Its poll is a read-only callback: Blender sets the flag around it. Called
+    on the main thread, it calls itself on another thread and returns once that
+    call is inside; that one returns when _end_nested_poll says so."""
+    bl_idname = "glint_test.read_only"
+    bl_label = "Read-only callback"
+
+    inside = threading.Event()
+    release = threading.Event()
+    thread = None
+
+    @classmethod
+    def poll(cls, context):
+        if threading.current_thread() is threading.main_thread():
+            _start_nested_poll()
+        else:
+            cls.inside.set()
+            cls.release.wait(10)
+        return False
+
+    def execute(self, context):
+        return {"FINISHED"}
+
+
+bpy.utils.register_class(GLINT_TEST_OT_read_only)
+
+
+def _start_nested_poll():
+    op = GLINT_TEST_OT_read_only
+    op.inside.clear()
+    op.release.clear()
+    op.thread = threading.Thread(target=bpy.ops.glint_test.read_only.poll)
+    op.thread.start()
+    if not op.inside.wait(10):
+        raise RuntimeError("the poll on the other thread never ran")
+
+
+def _end_nested_poll():
+    op = GLINT_TEST_OT_read_only
+    op.release.set()
+    op.thread.join()
+
+
+def _leave_read_only():
+    """Nest two callbacks across threads so that they end out of order: the
+    main thread's read-only poll saves 'writable' and sets read-only; the other
+    thread's saves 'read-only'; the main thread's ends first and restores
+    'writable', the other's ends last and restores 'read-only', which nothing
+    clears. A Cycles render and the panels drawn meanwhile can do the same.
+    False where the flag is one per thread (Blender 5.x), which this cannot set."""
+    bpy.ops.glint_test.read_only.poll()
+    _end_nested_poll()
+    return not _writes_allowed()
+
+
+def _end_read_only():
+    """The same nesting the other way round, so that Blender's own add-ons can
+    unregister when it quits: the outer callback is a property update, which
+    saves 'read-only' and allows writes; the other thread's poll saves 'writable'
+    and, ending last, restores it."""
+    _with_writes(_start_nested_poll)
+    _end_nested_poll()
+    if not _writes_allowed():
+        raise RuntimeError("Blender is still read-only")
 
 
 def _collect(i, step):
@@ -294,11 +395,16 @@ def _tick():
     if phase == "f12":
         step = RENDERS[i]
         result["renders"].append({"events": [], "panel_draws": []})
-        exec(step.get("python", ""))
-        _event("F12")  # before the call: the render thread starts within it
-        with _override(_main_window()):
-            ret = bpy.ops.render.render("INVOKE_DEFAULT", animation=bool(step.get("animation")))
-        _current()["invoke"] = sorted(ret)
+
+        _with_writes(lambda: exec(step.get("python", "")))
+        if step.get("read_only"):
+            _current()["read_only"] = _leave_read_only()
+
+        def f12():
+            _event("F12")  # before the call: the render thread starts within it
+            with _override(_main_window()):
+                return bpy.ops.render.render("INVOKE_DEFAULT", animation=bool(step.get("animation")))
+        _current()["invoke"] = sorted(_with_writes(f12))
         state.update(phase="rendering", started=time.monotonic())
         return 0.05
     if phase == "rendering":
@@ -336,20 +442,21 @@ def _tick():
             _current()["collected"] = _now()
         # The screenshots, the next step's code and F12, and the Info log at the
         # end all write or call operators.
-        if not _writes_allowed():
-            if time.monotonic() - state["settle"] > 30:
-                raise RuntimeError("Blender refused writes and operators for 30 s after the render")
-            _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
-            return 0.1
         if SHOTS:
-            _screenshots(str(i))
+            _with_writes(lambda: _screenshots(str(i)))
         state["index"] = i + 1
         state["phase"] = "f12" if i + 1 < len(RENDERS) else "done"
         return 0.1
-    _finish()
-    _write()
-    with _override(_main_window()):
-        bpy.ops.wm.quit_blender()
+
+    if not _writes_allowed():
+        _end_read_only()
+
+    def finish():
+        _finish()
+        _write()
+        with _override(_main_window()):
+            bpy.ops.wm.quit_blender()
+    _with_writes(finish)
     return None
 
 

@@ -4,6 +4,8 @@
 * :mod:`.nodes`: where the compositor tree lives, which node types and
   options it has, how sockets are addressed, the Render Layers' pass names,
   the File Output node;
+* :mod:`.writes`: main-thread writes where Blender has left Python's
+  writes refused (one flag for all threads up to 4.x, per thread in 5.x);
 * this module: which Blenders were tested, and what the running one is.
 
 Each difference is chosen by a feature test of the running Blender. The

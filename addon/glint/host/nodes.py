@@ -22,6 +22,7 @@ exist), so a Blender between the tested ones takes whichever form it has.
 from __future__ import annotations
 
 import math
+import struct
 from typing import Dict, Tuple
 
 import bpy
@@ -171,9 +172,18 @@ def coarse_read_back_by_scale() -> bool:
     return compositor_places_regions() or scale_reads_by_domain() or scale_offset_places_read()
 
 
+def stored_float(value: float) -> float:
+    """``value`` as a float property or socket holds it (single precision):
+    what a value read back is compared with, so that a write that would change
+    nothing is not made. Each write is an RNA update, and at render_init on the
+    render thread one that Blender may refuse (host/writes.py)."""
+    return struct.unpack("f", struct.pack("f", value))[0]
+
+
 def set_scale_offset(node, x: float, y: float) -> None:
     """A ``frame_scale`` node's offsets, fractions of the frame's width (only
     where the options are properties: scale_offset_places_read)."""
+    x, y = stored_float(x), stored_float(y)
     if (node.offset_x, node.offset_y) != (x, y):
         node.offset_x, node.offset_y = x, y
 

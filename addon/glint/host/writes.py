@@ -1,0 +1,69 @@
+"""Main-thread work that writes to Blender data, even where Blender has left
+Python's writes refused.
+
+Blender refuses Python's writes to ID data, and calls of operators, while a
+read-only Python callback runs (a panel's ``draw``, a Python render engine's
+method such as Cycles'). It does so with one process-wide flag that each
+callback saves, sets and restores. When callbacks on the render thread and on
+the main thread overlap (the GIL changes hands between them), they can restore
+out of order and leave the flag set for the rest of the session: from then on
+every write from a timer or a handler fails with "Writing to ID classes in this
+context is not allowed" or "can't modify blend data in this state".
+
+Two things still work in that state: a property of the window manager may be
+written (Blender exempts it), and a property's update callback runs with
+writes allowed. :func:`run` goes through both. It is for the main thread with
+no render running (Glint's after-render work): on the render thread the update
+would post window notifiers from the wrong thread, so what Glint writes there
+is kept to calls Blender does not refuse (``pixels.foreach_set``, ``scale``).
+See docs/addon.md, *Writes Blender refuses*.
+"""
+from __future__ import annotations
+
+import threading
+from typing import Callable, Dict, TypeVar
+
+import bpy
+
+T = TypeVar("T")
+
+_PROP = "glint_write_through"
+_call: Dict[str, object] = {}
+
+
+def _through(self, context) -> None:
+    try:
+        _call["value"] = _call["fn"]()
+    except BaseException as exc:  # handed to run(), out of Blender's reach
+        _call["error"] = exc
+
+
+def run(fn: Callable[[], T]) -> T:
+    """``fn()`` with writes and operators allowed; its exceptions reach the caller."""
+    if threading.current_thread() is not threading.main_thread():
+        raise RuntimeError("glint.host.writes.run is for the main thread")
+    wm = bpy.data.window_managers[0] if bpy.data.window_managers else None
+    if wm is None or not hasattr(wm, _PROP):  # no window manager: nothing draws, nothing refuses
+        return fn()
+    _call.clear()
+    _call["fn"] = fn
+    try:
+        setattr(wm, _PROP, not getattr(wm, _PROP))
+        if "error" in _call:
+            raise _call["error"]
+        if "value" not in _call:
+            raise RuntimeError("the window manager's update callback did not run")
+        return _call["value"]
+    finally:
+        _call.clear()
+
+
+def register() -> None:
+    setattr(bpy.types.WindowManager, _PROP, bpy.props.BoolProperty(
+        name="Glint write-through", description="Toggled to run Glint's after-render work (internal)",
+        update=_through, options={"HIDDEN", "SKIP_SAVE"}))
+
+
+def unregister() -> None:
+    if hasattr(bpy.types.WindowManager, _PROP):
+        delattr(bpy.types.WindowManager, _PROP)
