@@ -16,7 +16,7 @@ import bpy
 import numpy as np
 
 from . import gather
-from .host import data as host_data, engines, nodes as host_nodes
+from .host import data as host_data, engines, nodes as host_nodes, writes
 from .logic import compositing as cg
 from .logic import materials
 from .logic import projection
@@ -97,7 +97,7 @@ def _resize(img, w: int, h: int) -> None:
         try:
             img.generated_width, img.generated_height = w, h
         except AttributeError as exc:
-            if "not allowed" not in str(exc):
+            if not writes.refused(exc):
                 raise
     if tuple(img.size) != (w, h):
         img.scale(w, h)

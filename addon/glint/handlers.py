@@ -76,6 +76,10 @@ TRIM_SECONDS = 10.0
 # a tick (TICK_SECONDS) tags it for redraw, and the draw follows at once.
 PANEL_WAIT_SECONDS = 0.3
 PANEL_SEEN_SECONDS = 120.0
+# How long render_init tries again while Blender refuses the render thread's
+# writes (host/writes.py): a panel's draw on the main thread lasts milliseconds;
+# refused for longer, the flag is stuck and the render goes without reflections.
+REFUSED_WAIT_SECONDS = 2.0
 
 
 def _enabled(scene) -> bool:
@@ -120,7 +124,7 @@ def on_render_init(scene, *args):
         _announced["core"] = native.origin()
         log(f"using {native.describe()}")
     try:
-        turned_on = compositor.ensure(scene, allow_changes=_on_main_thread())
+        turned_on = _ensure_setup(scene)
     except compositor.SetupIncomplete as exc:
         # New nodes and links are not made from the render thread while the UI
         # may be drawing or evaluating the same trees: the main thread does it.
@@ -141,6 +145,21 @@ def on_render_init(scene, *args):
         log(own)
     STATE.rendering = True
     STATE.touch()
+
+
+def _ensure_setup(scene):
+    """compositor.ensure for a render about to start. On the render thread, up
+    to Blender 4.x, a Python panel drawn on the main thread meanwhile makes
+    Blender refuse this thread's writes: the values ensure writes (only where
+    they differ) are written again once the draw has ended."""
+    deadline = time.monotonic() + REFUSED_WAIT_SECONDS
+    while True:
+        try:
+            return compositor.ensure(scene, allow_changes=_on_main_thread())
+        except (AttributeError, RuntimeError) as exc:
+            if not writes.refused(exc) or _on_main_thread() or time.monotonic() > deadline:
+                raise
+            time.sleep(0.02)
 
 
 def _region_text(report) -> str:

@@ -184,6 +184,28 @@ def test_f12_composites_reflections_in_a_blender_left_read_only(xvfb, blender, s
     assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
 
 
+# A value of Glint's group set wrong after Glint was ticked (so that the
+# enable's own set-up does not correct it): render_init must write it back.
+DESYNC_GROUP = ("from glint import compositor as gc; from glint.logic import compositing as cg; "
+                "g = gc.find_group(); n = next(g.nodes[x] for x in cg.GROUP_NODES if x in g.nodes); "
+                "n.mute = not n.mute")
+
+
+def test_f12_while_a_panel_draws_writes_the_groups_values_once_it_ends(xvfb, blender, samples, tmp_path):
+    """Up to 4.x a Python panel drawn on the main thread makes Blender refuse the
+    render thread's writes meanwhile (docs/addon.md, *Writes Blender refuses*):
+    render_init writes the group's values once the draw has ended."""
+    out = str(tmp_path / "held")
+    renders = [TICK_AND_RENDER[0],
+               dict(python=TICK_AND_RENDER[1]["python"] + "; " + DESYNC_GROUP, hold_read_only=1.0)]
+    res, log = run_ui(blender, samples["mirror_floor"], out, {"renders": renders, "mirror_objects": MIRROR_OBJECTS})
+    on_render = res["renders"][1]
+    start, end = on_render["held"]
+    assert start <= on_render["hold_met"] <= end, on_render  # Glint's render_init began within the draw
+    assert on_render["glint"]["status"] == "ok", on_render["glint"]
+    assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
+
+
 def test_f12_in_cycles_leaves_its_true_reflections_alone(xvfb, blender, samples, tmp_path):
     """Cycles path-traces its reflections: ticking Glint changes nothing and says why."""
     out = str(tmp_path / "cycles")

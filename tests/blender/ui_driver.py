@@ -16,6 +16,10 @@ timeout (seconds per render), renders: a list of steps, one F12 each, with keys
   read_only         before the F12, leave Blender's Python read-only for good, the way
                     interleaved callbacks on two threads can (_leave_read_only); the
                     render's "read_only" says whether it could
+  hold_read_only    seconds: as the render starts, hold a read-only callback on the main
+                    thread that long, as a long panel draw would, while Glint's
+                    render_init runs; the render's "held" is [start, end] on the
+                    events' clock, "hold_met" when Glint's render_init began
 
 F12 is ``render.render('INVOKE_DEFAULT')`` from a timer in the main window's
 context: the render runs as a job on its own thread and opens the render window,
@@ -289,6 +293,53 @@ class GLINT_TEST_OT_read_only(bpy.types.Operator):
 bpy.utils.register_class(GLINT_TEST_OT_read_only)
 
 
+class GLINT_TEST_OT_hold(bpy.types.Operator):
+    """Its poll holds Blender's read-only flag for ``seconds``, sleeping (which
+    lets the render thread's Python run meanwhile)."""
+    bl_idname = "glint_test.hold"
+    bl_label = "Hold a read-only callback"
+
+    seconds = 0.0
+    holding = threading.Event()
+
+    @classmethod
+    def poll(cls, context):
+        cls.holding.set()
+        time.sleep(cls.seconds)
+        return False
+
+    def execute(self, context):
+        return {"FINISHED"}
+
+
+bpy.utils.register_class(GLINT_TEST_OT_hold)
+_hold_request = threading.Event()
+
+
+def _ask_for_a_hold(*args):
+    """First of the render_init handlers, on the render thread: when the step
+    asks, wait until the main thread holds the flag, so that the handlers after
+    this one (Glint's) run while it does."""
+    cur = _current()
+    if cur is None or not RENDERS[len(result["renders"]) - 1].get("hold_read_only"):
+        return
+    GLINT_TEST_OT_hold.holding.clear()
+    _hold_request.set()
+    if GLINT_TEST_OT_hold.holding.wait(10):
+        cur["hold_met"] = _now()
+
+
+bpy.app.handlers.render_init.insert(0, _ask_for_a_hold)
+
+
+def _hold_read_only(seconds):
+    _hold_request.clear()
+    GLINT_TEST_OT_hold.seconds = seconds
+    start = _now()
+    bpy.ops.glint_test.hold.poll()
+    _current()["held"] = [start, _now()]
+
+
 def _start_nested_poll():
     op = GLINT_TEST_OT_read_only
     op.inside.clear()
@@ -396,7 +447,7 @@ def _tick():
         step = RENDERS[i]
         result["renders"].append({"events": [], "panel_draws": []})
 
-        _with_writes(lambda: exec(step.get("python", "")))
+        _with_writes(lambda: exec(step.get("python", ""), dict(globals())))
         if step.get("read_only"):
             _current()["read_only"] = _leave_read_only()
 
@@ -409,6 +460,8 @@ def _tick():
         return 0.05
     if phase == "rendering":
         step, cur, st = RENDERS[i], _current(), _glint_state()
+        if _hold_request.is_set():  # asked for from render_init (_ask_for_a_hold)
+            _hold_read_only(step["hold_read_only"])
         # True: once the panel has drawn the export's progress; "drawn": once it has
         # drawn the Cancel button in this render (Blender 5.x draws nothing new
         # while the export runs).

@@ -31,6 +31,14 @@ _PROP = "glint_write_through"
 _call: Dict[str, object] = {}
 
 
+def refused(exc: BaseException) -> bool:
+    """Whether ``exc`` is Blender refusing a write or an operator for the flag,
+    rather than a fault of the write itself."""
+    text = str(exc)
+    return ((isinstance(exc, AttributeError) and "in this context is not allowed" in text)
+            or (isinstance(exc, RuntimeError) and "modify blend data in this state" in text))
+
+
 def _through(self, context) -> None:
     try:
         _call["value"] = _call["fn"]()
