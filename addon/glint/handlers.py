@@ -133,6 +133,14 @@ def on_render_init(scene, *args):
         _skip(job, scene, f"the compositor set-up was changed ({exc}); Glint restores it now, render again")
         return
     except Exception as exc:  # never let a node-tree problem stop the render
+        if writes.refused(exc):
+            # Refused past REFUSED_WAIT_SECONDS: Blender's flag is stuck. The
+            # main thread can still write (host/writes.py), after the job.
+            STATE.after_render(lambda name=scene.name: _repair_setup(name))
+            _skip(job, scene, f"Blender refused Python's writes from the render thread for "
+                  f"{REFUSED_WAIT_SECONDS:.0f} s (a fault of Blender before 5.0 that can follow a Cycles "
+                  f"render and lasts until it restarts); Glint writes the compositor's values now, render again")
+            return
         traceback.print_exc()
         _skip(job, scene, f"could not set up the compositor ({type(exc).__name__}: {exc})")
         return

@@ -168,27 +168,11 @@ def test_f12_composites_reflections(xvfb, blender, samples, tmp_path, sample, en
     assert not res["info_reports"], res["info_reports"]
 
 
-def test_f12_composites_reflections_in_a_blender_left_read_only(xvfb, blender, samples, tmp_path):
-    """Callbacks on two threads can leave Blender refusing Python's writes for the
-    rest of the session (docs/addon.md, *Writes Blender refuses*); a
-    render after that still gets its reflections: what Glint writes during a
-    render is not refused by that state."""
-    out = str(tmp_path / "read_only")
-    renders = [TICK_AND_RENDER[0], dict(TICK_AND_RENDER[1], read_only=True)]
-    res, log = run_ui(blender, samples["mirror_floor"], out, {"renders": renders, "mirror_objects": MIRROR_OBJECTS})
-    off_render, on_render = res["renders"]
-    skip_unless_left_read_only(on_render)
-    assert on_render["writes_refused"] >= 2, on_render  # the F12, the screenshots
-    assert on_render["glint"]["status"] == "ok", on_render["glint"]
-    assert "Glint: frame 1: reflections composited" in log
-    assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
-
-
 # A value of Glint's group set wrong after Glint was ticked (so that the
-# enable's own set-up does not correct it): render_init must write it back.
-DESYNC_GROUP = ("from glint import compositor as gc; from glint.logic import compositing as cg; "
-                "g = gc.find_group(); n = next(g.nodes[x] for x in cg.GROUP_NODES if x in g.nodes); "
-                "n.mute = not n.mute")
+# enable's own set-up does not correct it), as a material's edit leaves the
+# blur's switch: render_init must write it back.
+DESYNC_GROUP = ("from glint import compositor as gc; n = gc.find_group().nodes['use_blur']; "
+                "hn.set_switch(n, not hn.switch_is_on(n))")
 
 
 def test_f12_while_a_panel_draws_writes_the_groups_values_once_it_ends(xvfb, blender, samples, tmp_path):
@@ -204,6 +188,28 @@ def test_f12_while_a_panel_draws_writes_the_groups_values_once_it_ends(xvfb, ble
     assert start <= on_render["hold_met"] <= end, on_render  # Glint's render_init began within the draw
     assert on_render["glint"]["status"] == "ok", on_render["glint"]
     assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
+
+
+def test_f12_composites_reflections_in_a_blender_left_read_only(xvfb, blender, samples, tmp_path):
+    """Callbacks on two threads can leave Blender refusing Python's writes for the
+    rest of the session (docs/addon.md, *Writes Blender refuses*). A render after
+    that still gets its reflections: Glint's render-thread writes are not refused.
+    A render whose compositor values must change first renders without them, says
+    so, and the main thread writes them: the next render has them."""
+    out = str(tmp_path / "read_only")
+    renders = [TICK_AND_RENDER[0], dict(TICK_AND_RENDER[1], read_only=True),
+               {"python": DESYNC_GROUP}, {}]
+    res, log = run_ui(blender, samples["mirror_floor"], out, {"renders": renders, "mirror_objects": MIRROR_OBJECTS})
+    off, on, desynced, again = res["renders"]
+    skip_unless_left_read_only(on)
+    assert on["writes_refused"] >= 2 and desynced["writes_refused"] >= 2, res["renders"]  # F12, screenshots
+    assert on["glint"]["status"] == "ok", on["glint"]
+    assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
+    assert desynced["glint"]["status"] == "error", desynced["glint"]
+    assert "Blender refused Python's writes" in desynced["glint"]["message"]
+    assert np.array_equal(frame(out, 2), frame(out, 0)), "the frame is not the plain render"
+    assert again["glint"]["status"] == "ok", again["glint"]
+    assert_reflections(frame(out, 3), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
 
 
 def test_f12_in_cycles_leaves_its_true_reflections_alone(xvfb, blender, samples, tmp_path):
