@@ -160,14 +160,27 @@ def _ensure_setup(scene):
     to Blender 4.x, a Python panel drawn on the main thread meanwhile makes
     Blender refuse this thread's writes: the values ensure writes (only where
     they differ) are written again once the draw has ended."""
+    if _on_main_thread():  # a script's blocking render: no render thread, no draw meanwhile
+        return _on_main(lambda: compositor.ensure(scene))
     deadline = time.monotonic() + REFUSED_WAIT_SECONDS
     while True:
         try:
-            return compositor.ensure(scene, allow_changes=_on_main_thread())
+            return compositor.ensure(scene, allow_changes=False)
         except (AttributeError, RuntimeError) as exc:
-            if not writes.refused(exc) or _on_main_thread() or time.monotonic() > deadline:
+            if not writes.refused(exc) or time.monotonic() > deadline:
                 raise
             time.sleep(0.02)
+
+
+def _on_main(fn):
+    """fn() on the main thread; through host/writes.py's update where Blender's
+    read-only flag was left set (refused from a timer or a handler, it is stuck)."""
+    try:
+        return fn()
+    except (AttributeError, RuntimeError) as exc:
+        if not writes.refused(exc):
+            raise
+    return writes.run(fn)
 
 
 def _region_text(report) -> str:
@@ -305,9 +318,7 @@ def _run_queue(q) -> None:
         except queue.Empty:
             break
         try:
-            # Through a property update: Blender may have left Python's writes
-            # refused after the render (host/writes.py).
-            writes.run(fn)
+            _on_main(fn)
         except Exception:
             traceback.print_exc()
 
@@ -354,7 +365,7 @@ def on_load_post(*args):
     for scene in bpy.data.scenes:
         if _enabled(scene):
             try:
-                turned_on = compositor.ensure(scene)
+                turned_on = _on_main(lambda scene=scene: compositor.ensure(scene))
                 if turned_on:
                     log(f"scene {scene.name!r}: {turned_on}")
             except Exception as exc:

@@ -314,12 +314,17 @@ class GLINT_TEST_OT_hold(bpy.types.Operator):
 
 bpy.utils.register_class(GLINT_TEST_OT_hold)
 _hold_request = threading.Event()
+_f12_returned = threading.Event()
 
 
-def _ask_for_a_hold(*args):
-    """First of the render_init handlers, on the render thread: when the step
-    asks, wait until the main thread holds the flag, so that the handlers after
-    this one (Glint's) run while it does."""
+def _first_render_init(*args):
+    """First of the render_init handlers, on the render thread. It waits for
+    the F12 call to return: made from a property update (_with_writes), the
+    call runs with writes allowed, and a render thread started inside it must
+    not see that. When the step asks, it then waits until the main thread
+    holds the flag, so that the handlers after this one (Glint's) run while
+    it does."""
+    _f12_returned.wait(10)
     cur = _current()
     if cur is None or not RENDERS[len(result["renders"]) - 1].get("hold_read_only"):
         return
@@ -329,7 +334,7 @@ def _ask_for_a_hold(*args):
         cur["hold_met"] = _now()
 
 
-bpy.app.handlers.render_init.insert(0, _ask_for_a_hold)
+bpy.app.handlers.render_init.insert(0, _first_render_init)
 
 
 def _hold_read_only(seconds):
@@ -455,12 +460,16 @@ def _tick():
             _event("F12")  # before the call: the render thread starts within it
             with _override(_main_window()):
                 return bpy.ops.render.render("INVOKE_DEFAULT", animation=bool(step.get("animation")))
-        _current()["invoke"] = sorted(_with_writes(f12))
+        _f12_returned.clear()
+        try:
+            _current()["invoke"] = sorted(_with_writes(f12))
+        finally:
+            _f12_returned.set()
         state.update(phase="rendering", started=time.monotonic())
         return 0.05
     if phase == "rendering":
         step, cur, st = RENDERS[i], _current(), _glint_state()
-        if _hold_request.is_set():  # asked for from render_init (_ask_for_a_hold)
+        if _hold_request.is_set():  # asked for from render_init (_first_render_init)
             _hold_read_only(step["hold_read_only"])
         # True: once the panel has drawn the export's progress; "drawn": once it has
         # drawn the Cancel button in this render (Blender 5.x draws nothing new

@@ -13,9 +13,11 @@ context is not allowed" or "can't modify blend data in this state".
 Two things still work in that state: a property of the window manager may be
 written (Blender exempts it), and a property's update callback runs with
 writes allowed. :func:`run` goes through both. It is for the main thread with
-no render running (Glint's after-render work): on the render thread the update
-would post window notifiers from the wrong thread, so what Glint writes there
-is kept to calls Blender does not refuse (``pixels.foreach_set``, ``scale``).
+no render thread running: what Glint does after a render, on loading a file
+and in a script's blocking render, which handlers.py tries directly first. On
+the render thread the update would post window notifiers from the wrong
+thread, so what Glint writes there is kept to calls Blender does not refuse
+(``pixels.foreach_set``, ``scale``) and to values written when they differ.
 See docs/addon.md, *Writes Blender refuses*.
 """
 from __future__ import annotations
