@@ -138,7 +138,7 @@ def on_render_init(scene, *args):
             # main thread can still write (host/writes.py), after the job.
             STATE.after_render(lambda name=scene.name: _repair_setup(name))
             _skip(job, scene, f"Blender refused Python's writes from the render thread for "
-                  f"{REFUSED_WAIT_SECONDS:.0f} s (a fault of Blender before 5.0 that can follow a Cycles "
+                  f"{REFUSED_WAIT_SECONDS:.0f} s (a fault of Blender 3.x and 4.x that can follow a Cycles "
                   f"render and lasts until it restarts); Glint writes the compositor's values now, render again")
             return
         traceback.print_exc()
