@@ -49,14 +49,19 @@ def ensure_image(name: str, width: int = 4, height: int = 4):
     # Data, not colour: no view transform, no premultiplication of the alpha.
     # Set only when different: each assignment runs an RNA update (the colour
     # space one frees the image's buffers and tags the depsgraph), which must
-    # not happen per frame on a render thread.
+    # not happen per frame on a render thread. There, a new image's (one the
+    # user deleted) may meet a panel's draw (host/writes.py).
+    writes.retrying(lambda: _data_settings(img))
+    return img
+
+
+def _data_settings(img) -> None:
     if img.colorspace_settings.name != "Non-Color":
         img.colorspace_settings.name = "Non-Color"
     if img.alpha_mode != "CHANNEL_PACKED":
         img.alpha_mode = "CHANNEL_PACKED"
     if img.use_fake_user:
         img.use_fake_user = False
-    return img
 
 
 # Images written since they were last cleared. None: not known yet this session

@@ -76,10 +76,6 @@ TRIM_SECONDS = 10.0
 # a tick (TICK_SECONDS) tags it for redraw, and the draw follows at once.
 PANEL_WAIT_SECONDS = 0.3
 PANEL_SEEN_SECONDS = 120.0
-# How long render_init tries again while Blender refuses the render thread's
-# writes (host/writes.py): a panel's draw on the main thread lasts milliseconds;
-# refused for longer, the flag is stuck and the render goes without reflections.
-REFUSED_WAIT_SECONDS = 2.0
 
 
 def _enabled(scene) -> bool:
@@ -134,11 +130,11 @@ def on_render_init(scene, *args):
         return
     except Exception as exc:  # never let a node-tree problem stop the render
         if writes.refused(exc):
-            # Refused past REFUSED_WAIT_SECONDS: Blender's flag is stuck. The
+            # Refused past writes.WAIT_SECONDS: Blender's flag is stuck. The
             # main thread can still write (host/writes.py), after the job.
             STATE.after_render(lambda name=scene.name: _repair_setup(name))
             _skip(job, scene, f"Blender refused Python's writes from the render thread for "
-                  f"{REFUSED_WAIT_SECONDS:.0f} s (a fault of Blender 3.x and 4.x that can follow a Cycles "
+                  f"{writes.WAIT_SECONDS:.0f} s (a fault of Blender 3.x and 4.x that can follow a Cycles "
                   f"render and lasts until it restarts); Glint writes the compositor's values now, render again")
             return
         traceback.print_exc()
@@ -162,14 +158,7 @@ def _ensure_setup(scene):
     they differ) are written again once the draw has ended."""
     if _on_main_thread():  # a script's blocking render: no render thread, no draw meanwhile
         return _on_main(lambda: compositor.ensure(scene))
-    deadline = time.monotonic() + REFUSED_WAIT_SECONDS
-    while True:
-        try:
-            return compositor.ensure(scene, allow_changes=False)
-        except (AttributeError, RuntimeError) as exc:
-            if not writes.refused(exc) or time.monotonic() > deadline:
-                raise
-            time.sleep(0.02)
+    return writes.retrying(lambda: compositor.ensure(scene, allow_changes=False))
 
 
 def _on_main(fn):

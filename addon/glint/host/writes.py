@@ -23,6 +23,7 @@ See docs/addon.md, *Writes Blender refuses*.
 from __future__ import annotations
 
 import threading
+import time
 from typing import Callable, Dict, TypeVar
 
 import bpy
@@ -39,6 +40,28 @@ def refused(exc: BaseException) -> bool:
     text = str(exc)
     return ((isinstance(exc, AttributeError) and "in this context is not allowed" in text)
             or (isinstance(exc, RuntimeError) and "modify blend data in this state" in text))
+
+
+# How long the render thread tries a refused write again: a panel's draw on
+# the main thread lasts milliseconds; refused for longer, the flag is stuck.
+WAIT_SECONDS = 2.0
+
+
+def retrying(fn: Callable[[], T]) -> T:
+    """``fn()``, tried again every 20 ms for up to WAIT_SECONDS while Blender
+    refuses it, off the main thread: there, up to 4.x, a Python panel drawn on
+    the main thread refuses it for that moment. On the main thread a refusal
+    means the flag is stuck, and it is raised at once."""
+    if threading.current_thread() is threading.main_thread():
+        return fn()
+    deadline = time.monotonic() + WAIT_SECONDS
+    while True:
+        try:
+            return fn()
+        except (AttributeError, RuntimeError) as exc:
+            if not refused(exc) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.02)
 
 
 def _through(self, context) -> None:
