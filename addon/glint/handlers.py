@@ -132,6 +132,7 @@ def on_render_init(scene, *args):
         if writes.refused(exc):
             # Refused past writes.WAIT_SECONDS: Blender's flag is stuck. The
             # main thread can still write (host/writes.py), after the job.
+            _note_stuck()
             STATE.after_render(lambda name=scene.name: _repair_setup(name))
             _skip(job, scene, f"Blender refused Python's writes from the render thread for "
                   f"{writes.WAIT_SECONDS:.0f} s (a fault of Blender 3.x and 4.x that can follow a Cycles "
@@ -169,7 +170,20 @@ def _on_main(fn):
     except (AttributeError, RuntimeError) as exc:
         if not writes.refused(exc):
             raise
+    _note_stuck()
     return writes.run(fn)
+
+
+def _note_stuck() -> None:
+    """Say once that Blender's read-only flag is stuck; the panel shows it."""
+    if not STATE.writes_stuck:
+        STATE.writes_stuck = True
+        log(STUCK_NOTE)
+
+
+STUCK_NOTE = ("Blender refuses Python's writes to its data from timers and handlers since a render "
+              "(a fault of Blender 3.x and 4.x; other add-ons fail too): Glint works around it; "
+              "restarting Blender clears it")
 
 
 def _region_text(report) -> str:

@@ -67,6 +67,9 @@ class _State:
         # (None before it ran): the frame's log line reads it here, not from the
         # node tree, which the render thread had better not walk.
         self.second_bounce: Optional[bool] = None
+        # Blender refused Python's writes where nothing read-only was running
+        # (host/writes.py): its read-only flag is stuck until it restarts.
+        self.writes_stuck = False
 
     def log(self, message: str) -> str:
         line = f"{PREFIX} {message}"

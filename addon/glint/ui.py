@@ -38,6 +38,11 @@ class GLINT_PT_render(bpy.types.Panel):
             col = layout.column(align=True)
             col.label(text=f"Core {native.version()} from {native.source()}", icon="LINKED")
             col.label(text=native.origin() or "?")
+        if STATE.writes_stuck:
+            box = layout.box()
+            box.alert = True
+            box.label(text="Blender refuses add-ons' writes since a render", icon="ERROR")
+            box.label(text="(a Blender 3.x/4.x fault): restart Blender to clear it")
         layout.prop(glint, "preset")
         if glint.enabled:
             notice = compositor.turned_on_notice(context.scene)

@@ -197,8 +197,9 @@ def test_f12_composites_reflections_in_a_blender_left_read_only(xvfb, blender, s
     A render whose compositor values must change first renders without them, says
     so, and the main thread writes them: the next render has them."""
     out = str(tmp_path / "read_only")
-    renders = [TICK_AND_RENDER[0], dict(TICK_AND_RENDER[1], read_only=True),
-               {"python": DESYNC_GROUP}, {}]
+    stuck = "__import__('glint.state', fromlist=['STATE']).STATE.writes_stuck"
+    renders = [dict(TICK_AND_RENDER[0], check=stuck), dict(TICK_AND_RENDER[1], read_only=True),
+               {"python": DESYNC_GROUP, "check": stuck}, {}]
     res, log = run_ui(blender, samples["mirror_floor"], out, {"renders": renders, "mirror_objects": MIRROR_OBJECTS})
     off, on, desynced, again = res["renders"]
     skip_unless_left_read_only(on)
@@ -207,6 +208,8 @@ def test_f12_composites_reflections_in_a_blender_left_read_only(xvfb, blender, s
     assert_reflections(frame(out, 1), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
     assert desynced["glint"]["status"] == "error", desynced["glint"]
     assert "Blender refused Python's writes" in desynced["glint"]["message"]
+    assert off["check"] is False and desynced["check"] is True  # the panel's warning
+    assert "Glint: Blender refuses Python's writes to its data from timers and handlers" in log
     assert np.array_equal(frame(out, 2), frame(out, 0)), "the frame is not the plain render"
     assert again["glint"]["status"] == "ok", again["glint"]
     assert_reflections(frame(out, 3), frame(out, 0), res, MIRROR_OBJECTS, "Red Sphere")
