@@ -47,6 +47,7 @@ scene = bpy.context.scene
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scene_config  # noqa: E402  (beside this file)
 from glint.host import nodes as hn  # noqa: E402,F401  (steps' code reaches the compositor tree with it)
+from glint.host import writes  # noqa: E402
 
 scene_config.apply(scene, cfg)
 r = scene.render
@@ -227,43 +228,21 @@ def _writes_allowed():
     try:
         r.image_settings.file_format = r.image_settings.file_format
     except AttributeError as exc:
-        if "not allowed" in str(exc):
+        if writes.refused(exc):
             return False
         raise
     return True
 
 
-# A property update callback runs with writes allowed whatever the flag says,
-# and a property of the window manager may be written while the flag is set:
-# the driver's steps go through one when Blender refuses them (docs/addon.md,
-# *Writes Blender refuses*).
-_through = {}
-
-
-def _run_through_update(self, context):
-    try:
-        _through["value"] = _through["fn"]()
-    except BaseException as exc:  # re-raised in the timer, out of Blender's reach
-        _through["error"] = exc
-
-
-bpy.types.WindowManager.glint_test_through = bpy.props.BoolProperty(update=_run_through_update)
-
-
 def _with_writes(fn):
-    """fn(), where it may write to the scene and call operators."""
+    """fn(), where it may write to the scene and call operators: where Blender
+    refuses them, through the add-on's property update, which runs with writes
+    allowed whatever the flag says (glint.host.writes.run; docs/addon.md,
+    *Writes Blender refuses*)."""
     if _writes_allowed():
         return fn()
     _current()["writes_refused"] = _current().get("writes_refused", 0) + 1
-    _through.clear()
-    _through["fn"] = fn
-    wm = bpy.context.window_manager
-    wm.glint_test_through = not wm.glint_test_through
-    if "error" in _through:
-        raise _through["error"]
-    if "value" not in _through:
-        raise RuntimeError("the window manager's update callback did not run")
-    return _through["value"]
+    return writes.run(fn)
 
 
 class GLINT_TEST_OT_read_only(bpy.types.Operator):
