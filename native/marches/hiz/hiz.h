@@ -116,6 +116,14 @@ HizPyramid build_hiz_pyramid(const Image& position, const Image& normal, const I
 // (hiz_base.h), the same bytes.
 void hiz_reuse_surface_row(const TraceInputs& in, int y, WalkIsa isa, unsigned char* ok);
 
+// Answers every pixel (x0, y), (x0 + step, y), ... of a pass that does not
+// walk, and lists in xs, in order, those that do: a pixel that passed
+// hiz_reuse_surface_row() (`reusable`, on the second pass; null on the first)
+// takes its neighbours' reports where they agree; the rest are misses that a
+// walk's hit overwrites, and walk where they reflect. hiz_reuse.cpp.
+void hiz_row_jobs(const TraceInputs& in, Image& out, int y, int x0, int step, const unsigned char* reusable,
+                  std::vector<int>& xs);
+
 // The pixel's own ray (march_hiz.cpp's make_ray()) of pixels (xs[k], y) for
 // k in [0, n): made[k] 1 with rays[k] set, 0 where the pixel has no ray.
 // Eight pixels at a time where `isa` is the AVX2 walk's (hiz_base.h), the

@@ -2,9 +2,9 @@
 // reuse of rays and the pixels' own rays, one row at a time, in the form the
 // AVX2 versions (hiz_base_avx2.cpp, hiz_planes_avx2.cpp, hiz_reuse_avx2.cpp,
 // hiz_rays_avx2.cpp) take them: plain pointers, since those files share no
-// inline code with the rest of the library. march_hiz.cpp's base_range(),
-// reuse_surface() and make_ray(), and hiz_planes.cpp's plane_normal(), are
-// the scalar rules and explain them.
+// inline code with the rest of the library. march_hiz.cpp's base_range()
+// and make_ray(), hiz_reuse.cpp's reuse_surface() and hiz_planes.cpp's
+// plane_normal() are the scalar rules and explain them.
 #pragma once
 #include <cstddef>
 

@@ -1,4 +1,4 @@
-// The G-buffer half of the second pass's reuse test (march_hiz.cpp's
+// The G-buffer half of the second pass's reuse test (hiz_reuse.cpp's
 // reuse_surface()) for x86-64 CPUs with AVX2: eight pixels of a row at once,
 // one per lane. Like the other *_avx2.cpp files, this one alone is built with
 // -mavx2 and not -mfma and includes no inline functions but

@@ -1,6 +1,6 @@
 #version 430 core
-// The hiz march's reuse of rays (trace_hiz(), reuse_surface() and
-// reuse_reports() in march_hiz.cpp, same tests on the same values): after
+// The hiz march's reuse of rays (trace_hiz() in march_hiz.cpp, reuse_surface()
+// and reuse_reports() in hiz_reuse.cpp, same tests on the same values): after
 // trace_hiz.frag traced every other pixel of every other row into u_coarse,
 // an invocation per 2x2 quad of the frame. Its traced corner pixel is copied;
 // each other pixel takes what its traced neighbours agree on, and where they
@@ -120,7 +120,7 @@ bool reuse_neighbours(ivec2 c, Traced q0, Traced q1, Traced q2, Traced q3, int k
   if (k == 4) hits += (q2.r.z > 0.0 ? 1 : 0) + (q3.r.z > 0.0 ? 1 : 0);
   if (hits == 0) return true;
   if (hits < k) return false;
-  // One kind of report (reuse_reports() in march_hiz.cpp says why).
+  // One kind of report (reuse_reports() in hiz_reuse.cpp says why).
   int kind = report_kind(q0.r);
   if (report_kind(q1.r) != kind) return false;
   if (k == 4 && (report_kind(q2.r) != kind || report_kind(q3.r) != kind)) return false;
