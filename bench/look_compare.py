@@ -483,7 +483,7 @@ def glint_model_change(frame, snap):
     images = {cg.IMAGE_UV: uv, cg.IMAGE_WEIGHT: weight,
               cg.IMAGE_HIDDEN: blank if hidden is None else np.asarray(hidden, np.float32),
               cg.IMAGE_DEBUG: blank, cg.IMAGE_POSITION: blank, cg.IMAGE_NORMAL: blank, cg.IMAGE_SPECULAR: blank,
-              **cg.coarse_images(weight[..., 3], (0, 0, w, h), w, h)}
+              **gi.coarse_images(weight[..., 3], (0, 0, w, h), w, h)}
     base = np.concatenate([frame[..., :3], np.ones((h, w, 1))], axis=-1).astype(np.float32)
     light = np.broadcast_to(np.array((*snap["colour"], 1.0), np.float32), base.shape).copy()
     out = gm.evaluate_group(base, images, map_uv, gauss_clamp, specular_light=light, world_specular=True,

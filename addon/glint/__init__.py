@@ -22,8 +22,8 @@ bl_info = {
 # (tests/addon/test_reload_order.py).
 RELOAD_ORDER = (
     "logic", "logic.schema", "logic.texels", "logic.materials", "logic.projection", "logic.frustum", "logic.settings",
-    "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement",
-    "logic.compositing", "host", "host.engines", "host.nodes", "host.data", "host.writes", "native", "state",
+    "logic.progress", "logic.geometry", "logic.reduced", "logic.world", "logic.measurement", "logic.compositing",
+    "logic.group_images", "host", "host.engines", "host.nodes", "host.data", "host.writes", "native", "state",
     "gather", "compositor", "exact_cache", "frame", "measure", "properties", "preferences", "operators",
     "ui", "handlers")
 if "bpy" in locals():

@@ -18,6 +18,7 @@ import numpy as np
 from . import gather
 from .host import data as host_data, engines, nodes as host_nodes, writes
 from .logic import compositing as cg
+from .logic import group_images as gi
 from .logic import materials
 from .logic import projection
 from .logic import settings as settings_logic
@@ -238,7 +239,7 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
     (``world_specular``) and whether hidden sides are shown (the frame then
     fills the hidden image: ``settings.shows_hidden_sides``), where the
     coarse read-back's Scale reads for a ``frame_size`` (width, height) render
-    (cg.coarse_grid_shift or cg.coarse_scale_offset, where the host needs
+    (gi.coarse_grid_shift or gi.coarse_scale_offset, where the host needs
     one), and the mute of the nodes that only a Switch's dropped side reads."""
     group = find_group()
     if group is None:
@@ -255,14 +256,14 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
     by_domain = host_nodes.scale_reads_by_domain()
     grid = group.nodes.get("coarse_grid")
     if grid is not None and by_domain and frame_size is not None:
-        for index, value in enumerate(cg.coarse_grid_shift(*frame_size), start=1):
+        for index, value in enumerate(gi.coarse_grid_shift(*frame_size), start=1):
             sock = host_nodes.input_socket(grid, "translate", index)
             value = host_nodes.stored_float(value)
             if sock.default_value != value:
                 sock.default_value = value
     scale = group.nodes.get("coarse_to_frame")
     if scale is not None and host_nodes.scale_offset_places_read() and frame_size is not None:
-        host_nodes.set_scale_offset(scale, *cg.coarse_scale_offset(*frame_size))
+        host_nodes.set_scale_offset(scale, *gi.coarse_scale_offset(*frame_size))
     # What only a dropped side of a Switch reads is muted: Blender 5.x
     # computes both sides (cg.dead_nodes).
     dead = cg.dead_nodes(states)

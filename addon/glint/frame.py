@@ -21,7 +21,7 @@ import numpy as np
 
 from . import compositor, exact_cache, gather, native
 from .host import nodes as host_nodes
-from .logic import compositing, geometry, reduced, settings as settings_logic, texels
+from .logic import compositing, geometry, group_images, reduced, settings as settings_logic, texels
 from .logic import world as world_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
@@ -336,7 +336,7 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
     else:
         # A hit's replaced share can fall to 0 or below (the hit's own specular
         # taken along the ray): its vis still marks it.
-        region = compositing.image_region(np.maximum(uv[..., 2], uv[..., 3]), weight[..., 3])
+        region = group_images.image_region(np.maximum(uv[..., 2], uv[..., 3]), weight[..., 3])
     keys = {compositing.IMAGE_FINE: (region, cam.width, cam.height)}
     offset = (0.0, 0.0)
     hidden_imgs = {}
@@ -345,7 +345,7 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
         # hidden sides, a pixel or two when there are none.
         if not frame.layers.get("hidden_pixels"):
             hidden = None
-        hidden_imgs, offset = compositing.hidden_images(hidden, region, cam.width, cam.height, placeable)
+        hidden_imgs, offset = group_images.hidden_images(hidden, region, cam.width, cam.height, placeable)
         if hidden is None:
             # all zeros, and the same while the region keeps its size: written once
             # (on a compositor that cannot place them they are frame-sized)
@@ -354,12 +354,12 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
     # not read (compositing.switch_states)
     # The core's bin means where it has them (a core from before: None, the rule in numpy).
     bin_means = getattr(frame.core, "positive_bin_means", None)
-    images = compositing.region_images(uv, weight, region, offset,
+    images = group_images.region_images(uv, weight, region, offset,
                                        fine=not host_nodes.coarse_read_back_by_scale(), bin_means=bin_means)
     images.update(hidden_imgs)
     frame.report.region = region
     if view in compositing.GBUFFER_DEBUG_VIEWS:
-        images[compositing.IMAGE_DEBUG] = compositing.debug_image(view, position, normal, specular, uv)
+        images[compositing.IMAGE_DEBUG] = group_images.debug_image(view, position, normal, specular, uv)
     if frame.values["write_layers_exr"]:
         images[compositing.IMAGE_POSITION] = position
         n4 = np.array(normal, dtype=np.float32, copy=True)

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import compositor, gather, measure, native
 from .frame import mesh_kwargs, rasterize, settings_dict
-from .logic import compositing, measurement, settings as settings_logic
+from .logic import compositing, group_images, measurement, settings as settings_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, log
 
@@ -188,7 +188,7 @@ class GLINT_OT_compute_layers(bpy.types.Operator):
         view = context.scene.glint.debug_view
         if view not in compositing.GBUFFER_DEBUG_VIEWS:
             view = "VISIBILITY"
-        img = compositing.debug_image(view, r["position"], r["normal"], r["specular"], r["uv"])
+        img = group_images.debug_image(view, r["position"], r["normal"], r["specular"], r["uv"])
         compositor.fill_images({compositing.IMAGE_DEBUG: img})
         with STATE.lock:
             STATE.arrays = {k: r[k] for k in ("position", "normal", "specular", "uv", "projection")}

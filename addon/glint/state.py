@@ -30,7 +30,7 @@ class FrameReport:
     culled: int = 0
     reflective_pixels: int = 0
     # (x0, y0, x1, y1): the pixels the compositor's group works on, the rest of
-    # the frame passes through (logic/compositing.image_region)
+    # the frame passes through (logic/group_images.image_region)
     region: Tuple[int, int, int, int] = (0, 0, 0, 0)
     timings_ms: Dict[str, float] = field(default_factory=dict)
 

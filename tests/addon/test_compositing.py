@@ -12,6 +12,7 @@ import group_model as gm
 from glint_addon_helpers import load_logic
 
 cg = load_logic("compositing")
+gi = load_logic("group_images")
 texels = load_logic("texels")
 
 # The abstract kinds' inputs and outputs as the description numbers them
@@ -150,7 +151,7 @@ def images_of(base, position, spec, uv, weight, lod, debug=None, hidden=None):
             cg.IMAGE_HIDDEN: np.zeros_like(base) if hidden is None else hidden,
             cg.IMAGE_DEBUG: np.zeros_like(base) if debug is None else debug, cg.IMAGE_POSITION: position,
             cg.IMAGE_NORMAL: np.zeros_like(base), cg.IMAGE_SPECULAR: spec,
-            **cg.coarse_images(lod, (0, 0, wd, h), wd, h)}
+            **gi.coarse_images(lod, (0, 0, wd, h), wd, h)}
 
 
 @pytest.mark.parametrize("engine_passes", [True, False])
@@ -441,14 +442,14 @@ def test_debug_images():
     spec[0, 0] = (0.5, 0.25, 0.125, 1)
     uv = np.zeros((1, 2, 4), np.float32)
     uv[0, 0] = (0.3, 0.7, 0.5, 0.5)
-    assert np.array_equal(cg.debug_image("POSITION", position, normal, spec, uv)[0, 0], (1, 2, -3, 1))
-    assert np.array_equal(cg.debug_image("NORMAL", position, normal, spec, uv)[0, 0], (0.5, 0.5, 1, 1))
-    assert np.array_equal(cg.debug_image("NORMAL", position, normal, spec, uv)[0, 1], (0, 0, 0, 1))
-    assert np.array_equal(cg.debug_image("SPECULAR", position, normal, spec, uv)[0, 0], (0.5, 0.25, 0.125, 1))
-    assert np.allclose(cg.debug_image("UV", position, normal, spec, uv)[0, 0], (0.3, 0.7, 0, 1))
-    assert np.array_equal(cg.debug_image("VISIBILITY", position, normal, spec, uv)[0, 0], (0.5, 0.5, 0.5, 1))
+    assert np.array_equal(gi.debug_image("POSITION", position, normal, spec, uv)[0, 0], (1, 2, -3, 1))
+    assert np.array_equal(gi.debug_image("NORMAL", position, normal, spec, uv)[0, 0], (0.5, 0.5, 1, 1))
+    assert np.array_equal(gi.debug_image("NORMAL", position, normal, spec, uv)[0, 1], (0, 0, 0, 1))
+    assert np.array_equal(gi.debug_image("SPECULAR", position, normal, spec, uv)[0, 0], (0.5, 0.25, 0.125, 1))
+    assert np.allclose(gi.debug_image("UV", position, normal, spec, uv)[0, 0], (0.3, 0.7, 0, 1))
+    assert np.array_equal(gi.debug_image("VISIBILITY", position, normal, spec, uv)[0, 0], (0.5, 0.5, 0.5, 1))
     with pytest.raises(ValueError):
-        cg.debug_image("REFLECTION", position, normal, spec, uv)
+        gi.debug_image("REFLECTION", position, normal, spec, uv)
 
 
 # -- the region: only the part of the frame that can change is composited ------
@@ -456,22 +457,22 @@ def test_debug_images():
 def test_image_region_is_the_box_of_hits_and_blurred_pixels_grown_by_the_pad():
     vis = np.zeros((60, 80), np.float32)
     lod = np.zeros((60, 80), np.float32)
-    assert cg.image_region(vis, lod) == (0, 0, 1, 1)  # nothing to do: one pixel, vis 0
+    assert gi.image_region(vis, lod) == (0, 0, 1, 1)  # nothing to do: one pixel, vis 0
     vis[25, 27] = 0.5
     vis[29, 32] = 1.0
-    p = cg.REGION_PAD
+    p = gi.REGION_PAD
     assert p >= 2 * cg.COARSE  # the coarse levels' clear border (test_a_region_composites_...)
     # rows 25-p..30+p are 5 + 2p, odd in a frame 60 high: one more row, so
     # that the region centred on the frame sits on whole pixels
-    assert cg.image_region(vis, lod) == (27 - p, 25 - p, 33 + p, 30 + p + 1)
+    assert gi.image_region(vis, lod) == (27 - p, 25 - p, 33 + p, 30 + p + 1)
     lod[35, 40] = 0.25  # a rough pixel takes blurred D from hits around it
-    assert cg.image_region(vis, lod) == (27 - p, 25 - p, 41 + p, 36 + p + 1)
+    assert gi.image_region(vis, lod) == (27 - p, 25 - p, 41 + p, 36 + p + 1)
     lod[35, 40] = 0.0
     vis[59, 79] = 1.0  # at the frame's far corner an odd count grows towards the origin
-    assert cg.image_region(vis, lod) == (27 - p - 1, 25 - p - 1, 80, 60)
+    assert gi.image_region(vis, lod) == (27 - p - 1, 25 - p - 1, 80, 60)
     vis[59, 79] = 0.0
     vis[0, 0] = lod[59, 79] = 1.0  # the pad stops at the frame
-    assert cg.image_region(vis, lod) == (0, 0, 80, 60)
+    assert gi.image_region(vis, lod) == (0, 0, 80, 60)
 
 
 @pytest.mark.parametrize("region,size", [((3, 2, 23, 12), (64, 36)), ((40, 20, 61, 31), (64, 36)),
@@ -484,7 +485,7 @@ def test_the_offset_puts_the_region_back_where_it_was_cut(region, size):
     w, h = size
     rng = np.random.default_rng(1)
     frame = rng.uniform(size=(h, w, 4)).astype(np.float32)
-    imgs = cg.region_images(frame, frame, region)
+    imgs = gi.region_images(frame, frame, region)
     x0, y0, x1, y1 = region
     dx, dy = imgs[cg.IMAGE_OFFSET][0, 0, :2]
     placed = gm._translated(imgs[cg.IMAGE_UV], float(dx), float(dy), (h, w))
@@ -523,18 +524,18 @@ def test_a_region_composites_what_the_whole_frame_does(world, bounce, blur, hidd
         hid[ys[away], xs[away]] = 0
         assert (hid[..., 3] > 0).sum() > 3
     full = images_of(base, position, spec, uv, weight, lod, hidden=hid)
-    region = cg.image_region(full[cg.IMAGE_UV][..., 3], lod)
+    region = gi.image_region(full[cg.IMAGE_UV][..., 3], lod)
     h, w = base.shape[:2]
-    p = cg.REGION_PAD
+    p = gi.REGION_PAD
     # rows 17..25 grown by the pad are 9 + 2p, odd in a frame 48 high: one row more
     assert region == (19 - p, 17 - p, 33 + p, 26 + p + 1)
     assert region[0] % cg.COARSE and region[1] % cg.COARSE  # blocks on the frame's grid, not the region's
-    boxed, offset = cg.hidden_images(hid, region, w, h)
+    boxed, offset = gi.hidden_images(hid, region, w, h)
     if hidden:  # the box is smaller than the region and not centred on it
-        box = cg.hidden_box(hid[..., 3] > 0, region)
+        box = gi.hidden_box(hid[..., 3] > 0, region)
         assert (box[2] - box[0]) * (box[3] - box[1]) < (region[2] - region[0]) * (region[3] - region[1])
         assert offset != (0.0, 0.0)
-    cut = dict(full, **cg.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region, offset), **boxed)
+    cut = dict(full, **gi.region_images(full[cg.IMAGE_UV], full[cg.IMAGE_WEIGHT], region, offset), **boxed)
     if world:  # the world path's inputs: a colour (an RGB node, no size) and the weight image
         kw = dict(specular_light=np.array((0.3, 0.35, 0.45, 1.0), np.float32), world_specular=True)
     else:
@@ -560,17 +561,17 @@ def test_the_hidden_box_bounds_the_hidden_sides_with_the_regions_parity():
     seen = np.zeros((20, 30), bool)
     seen[5:8, 10:13] = True  # 3x3
     region = (2, 1, 28, 19)  # 26 x 18: even, even
-    box = cg.hidden_box(seen, region)
+    box = gi.hidden_box(seen, region)
     assert box[0] <= 10 and box[1] <= 5 and box[2] >= 13 and box[3] >= 8
     assert (box[2] - box[0]) % 2 == 0 and (box[3] - box[1]) % 2 == 0
-    images, offset = cg.hidden_images(np.dstack([np.ones((20, 30, 3)), seen]).astype(np.float32), region, 30, 20)
+    images, offset = gi.hidden_images(np.dstack([np.ones((20, 30, 3)), seen]).astype(np.float32), region, 30, 20)
     bw, bh = box[2] - box[0], box[3] - box[1]
     assert set(images) == {cg.IMAGE_HIDDEN} and images[cg.IMAGE_HIDDEN].shape == (bh, bw, 4)
     assert offset == (box[0] + bw / 2 - 15, box[1] + bh / 2 - 10)
     assert np.array_equal(images[cg.IMAGE_HIDDEN][..., 3], seen[box[1]:box[3], box[0]:box[2]])
-    none, _ = cg.hidden_images(None, region, 30, 20)
+    none, _ = gi.hidden_images(None, region, 30, 20)
     assert none[cg.IMAGE_HIDDEN].shape[:2] == (2, 2) and not none[cg.IMAGE_HIDDEN].any()
-    whole, at = cg.hidden_images(None, region, 30, 20, placeable=False)
+    whole, at = gi.hidden_images(None, region, 30, 20, placeable=False)
     assert whole[cg.IMAGE_HIDDEN].shape[:2] == (18, 26) and at == (0.0, 0.0)
 
 
@@ -603,7 +604,7 @@ def test_the_grid_shift_places_a_domain_scale_s_read_on_the_texels_frame_scale_r
     coarse_grid_shift as t that is frame_scale's texel x cw / W at every pixel
     (checked in Blender 5.2 to 2e-6 at 64x48, 66x50 and 68x52)."""
     w, h = wh
-    for size, n, t in zip((w, h), cg.coarse_size(w, h), cg.coarse_grid_shift(w, h)):
+    for size, n, t in zip((w, h), gi.coarse_size(w, h), gi.coarse_grid_shift(w, h)):
         c = -0.5 if n % 2 != size % 2 else 0.0
         x = np.arange(size, dtype=np.float64)
         u = (x + 0.5 - size / 2 - t) / (size / n) + n / 2 - 0.5 - c
@@ -618,8 +619,8 @@ def test_the_scale_offset_places_4_3_s_read_on_the_texels_frame_scale_reads(wh):
     16x6 and 16x12, 66x50, 480x270 and 1920x1080). coarse_scale_offset's
     offsets make that frame_scale's texel x cw / W, y ch / H."""
     w, h = wh
-    cw, ch = cg.coarse_size(w, h)
-    ox, oy = cg.coarse_scale_offset(w, h)
+    cw, ch = gi.coarse_size(w, h)
+    ox, oy = gi.coarse_scale_offset(w, h)
     x, y = np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64)
     assert np.allclose((x + 0.5 - ox * w) * cw / w - 0.5, x * cw / w, rtol=0, atol=1e-9)
     assert np.allclose((y + 0.5 - oy * w) * ch / h - 0.5, y * ch / h, rtol=0, atol=1e-9)
@@ -636,12 +637,12 @@ def test_the_cores_bin_means_are_the_rules_bit_for_bit(core, hw):
     weight = rng.uniform(-1, 9, (h, w, 4)).astype(np.float32)
     weight[rng.uniform(size=(h, w)) < 0.3, 3] = 0.0
     weight[h // 2, w // 2, 3] = np.nan
-    cw, ch = cg.coarse_size(w, h)
+    cw, ch = gi.coarse_size(w, h)
     regions = [(0, 0, w, h)] + ([(3, 2, w - 5, h - 1)] if w > 8 and h > 3 else [])
     for x0, y0, x1, y1 in regions:
         lod = weight[y0:y1, x0:x1, 3]
-        tx, ty = cg._nearest_texels(x0, x1, w, cw), cg._nearest_texels(y0, y1, h, ch)
-        want = cg.positive_bin_means(lod, ty, tx, (ch, cw))
+        tx, ty = gi._nearest_texels(x0, x1, w, cw), gi._nearest_texels(y0, y1, h, ch)
+        want = gi.positive_bin_means(lod, ty, tx, (ch, cw))
         got = core.positive_bin_means(lod, ty, tx, (ch, cw))
         assert got.dtype == np.float32 and np.array_equal(got, want, equal_nan=True), (hw, x0, y0)
     if h > 1:  # bins that decrease
@@ -658,20 +659,20 @@ def test_the_coarse_canvas_comes_back_as_blenders_scale_reads_it(hw):
     3.4 at 64x36 and 66x50 to 1e-6), on frames whose size is not whole texels,
     and the coarse canvas's texels on the frame's grid whatever the region."""
     h, w = hw
-    cw, ch = cg.coarse_size(w, h)
+    cw, ch = gi.coarse_size(w, h)
     img = np.random.default_rng(4).uniform(-1, 1, (ch, cw, 4)).astype(np.float32)
     x = (np.arange(w) * (cw / w))[None, :] * np.ones((h, 1))
     y = (np.arange(h) * (ch / h))[:, None] * np.ones((1, w))
     assert np.allclose(gm._scaled_to_frame(img, (h, w)), bilinear_zero(img, x, y), atol=1e-6)
     lod = np.random.default_rng(5).uniform(-1, 9, (h, w)).astype(np.float32)
-    whole = cg.coarse_images(lod, (0, 0, w, h), w, h)
+    whole = gi.coarse_images(lod, (0, 0, w, h), w, h)
     if w > 4:
         region = (3, 2, w - 5, h - 1)
         cut = np.zeros_like(lod)
         cut[2:h - 1, 3:w - 5] = lod[2:h - 1, 3:w - 5]
-        part = cg.coarse_images(lod[2:h - 1, 3:w - 5], region, w, h, fine=False)
+        part = gi.coarse_images(lod[2:h - 1, 3:w - 5], region, w, h, fine=False)
         assert cg.IMAGE_FINE not in part
-        same = cg.coarse_images(cut, (0, 0, w, h), w, h)[cg.IMAGE_COARSE]
+        same = gi.coarse_images(cut, (0, 0, w, h), w, h)[cg.IMAGE_COARSE]
         assert np.allclose(part[cg.IMAGE_COARSE][..., 3], same[..., 3])
     fine = whole[cg.IMAGE_FINE]  # the Map UV read-back: the same points as the Scale's
     assert np.allclose(fine[..., 0] * cw - 0.5, x) and np.allclose(fine[..., 1] * ch - 0.5, y)

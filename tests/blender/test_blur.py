@@ -48,7 +48,7 @@ def test_the_compositor_blurs_as_the_formula_says(blender, samples, session_dir)
     # filter's sigma against the reference's filter), 0.051 / 0.009 on 4.3, 0.013 / 0.000 on 5.2; with a Soften
     # filter left to clamp D at 0, 0.146 near on 3.4; on 3.4 the levels at 0.7x their sigma give 0.11,
     # Blender's frame moved by 2 pixels 0.07-0.09. On 5.x the wide levels come back through
-    # the Scale placed by compositing.coarse_grid_shift: 0.013, as through the fine image's
+    # the Scale placed by group_images.coarse_grid_shift: 0.013, as through the fine image's
     # Map UV; without the shift 0.050, so the bound there is tighter.
     version = tuple(int(v) for v in re.search(r"Blender (\d+)\.(\d+)", log).groups())
     assert err["wide"] < (0.03 if version >= (5, 0) else 0.06) and err["near"] < 0.05, version

@@ -1,5 +1,5 @@
 """The compositor group works on the region of the frame that can change
-(logic/compositing.image_region) and translates its results back: the frame
+(logic/group_images.image_region) and translates its results back: the frame
 must be the one the group gives when it works on the whole frame (as it does
 for the layers EXR), in both of Blender's execution models, on the world's
 path and the passes' path, with the second bounce and the blur, and with the

@@ -128,7 +128,7 @@ def default_tree_kinds() -> Tuple[Tuple[str, ...], ...]:
 
 def compositor_places_regions() -> bool:
     """Whether a smaller image translated by the offset image lands where
-    ``logic/compositing.image_region`` cut it from (the compositor then runs
+    ``logic/group_images.image_region`` cut it from (the compositor then runs
     Map UV on the region only). True of the compositor of 3.x-4.1, whose trees
     still offer the Tiled and Full Frame execution models; the compositors
     after it take a Translate's offset as a single value, not from an image,
@@ -141,7 +141,7 @@ def scale_reads_by_domain() -> bool:
     """Whether a Scale (and a Translate after it) only transform the canvas's
     domain, which the Mix that meets the frame samples once, bilinearly and
     centred on the frame: the compositor 5.x shares with the GPU. There
-    ``compositing.coarse_grid_shift`` makes the Scale read the coarse canvas
+    ``group_images.coarse_grid_shift`` makes the Scale read the coarse canvas
     where 3.x-4.1's does (checked on 5.2 to 2e-6 at 64x48, 66x50 and 68x52,
     and 7e-5 at 1920x1080; docs/addon.md). 4.4-4.5's compositor may read so
     too but is untested, so it keeps the fine image's Map UV; 4.2-4.3's Scale
@@ -153,7 +153,7 @@ def scale_reads_by_domain() -> bool:
 
 def scale_offset_places_read() -> bool:
     """Whether the Scale's own offsets place its read where 3.x-4.1's Scale
-    reads (``compositing.coarse_scale_offset``): 4.2-4.3's compositor, which
+    reads (``group_images.coarse_scale_offset``): 4.2-4.3's compositor, which
     realizes every node's output, so a Translate after the Scale would
     resample it (docs/frame-cost.md, *On 4.3: what a node costs, and how its Scale
     reads*). Measured
@@ -411,10 +411,10 @@ def new_node(tree, kind: str, props: Dict[str, object], image_of=None):
 
 
 def _set_translate(node, props, sockets: bool) -> None:
-    """Whole-pixel moves (logic/compositing.image_region): Nearest keeps them
+    """Whole-pixel moves (logic/group_images.image_region): Nearest keeps them
     exact where a Blender interpolates (4.2+); 3.4 has no such option. The
     coarse read-back's move (onto "grid") is the last transform of the Scale
-    before it, whose read it places (compositing.coarse_grid_shift): on 5.x
+    before it, whose read it places (group_images.coarse_grid_shift): on 5.x
     the last node's interpolation is the one the Mix samples with."""
     if sockets:
         for name in ("Extension X", "Extension Y"):
