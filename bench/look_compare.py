@@ -473,8 +473,9 @@ def glint_model_change(frame, snap):
         sys.path.insert(0, models)
     import group_model as gm
     from compositing_reference import gauss_clamp, map_uv
+    from glint_addon_helpers import load_logic
 
-    cg = gm.cg
+    cg, gi = gm.cg, load_logic("group_images")
     uv, weight = (np.asarray(snap["arrays"][k], np.float32) for k in ("uv", "weight"))
     hidden = snap["arrays"].get("hidden")
     switch = snap["switch"]
