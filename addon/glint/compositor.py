@@ -277,12 +277,13 @@ def update_group(glint, rough: bool = True, bounce: bool = False, world_specular
 
 def render_frame_size(scene) -> Optional[Tuple[int, int]]:
     """The (width, height) the scene renders and composites at, or None when
-    it renders nothing (a percentage that leaves no pixel)."""
-    r = scene.render
+    it renders nothing (a percentage or a cropped render region that leaves no
+    pixel)."""
     try:
-        return projection.render_size(r.resolution_x, r.resolution_y, r.resolution_percentage)
+        win = gather.render_window(scene.render)
     except projection.ProjectionError:
         return None
+    return win.width, win.height
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:

@@ -48,7 +48,8 @@ class CameraInfo:
 
 def camera(depsgraph) -> CameraInfo:
     """The render camera's projection (``calc_matrix_camera`` at the render's size,
-    pixel aspect and percentage; shift and sensor fit included) and view matrix."""
+    pixel aspect and percentage; shift and sensor fit included; narrowed to the
+    render region when the render is cropped to it) and view matrix."""
     scene = depsgraph.scene_eval
     cam = scene.camera
     if cam is None:
@@ -59,17 +60,31 @@ def camera(depsgraph) -> CameraInfo:
         raise SkipFrame(f"camera {cam.name!r} is panoramic; screen-space reflections need a "
                         f"perspective or orthographic camera, so this frame is skipped")
     r = scene.render
-    if r.use_border and r.use_crop_to_border:
-        raise SkipFrame("render region with 'Crop to Render Region' is not supported")
-    w, h = projection.render_size(r.resolution_x, r.resolution_y, r.resolution_percentage)
-    proj = np.array(cam.calc_matrix_camera(depsgraph, x=w, y=h, scale_x=r.pixel_aspect_x,
-                                           scale_y=r.pixel_aspect_y), dtype=np.float64)
+    try:
+        win = render_window(r)
+    except projection.ProjectionError as exc:
+        raise SkipFrame(str(exc)) from exc
+    proj = np.array(cam.calc_matrix_camera(depsgraph, x=win.full_width, y=win.full_height,
+                                           scale_x=r.pixel_aspect_x, scale_y=r.pixel_aspect_y), dtype=np.float64)
     try:
         kind = projection.classify_projection(proj)
     except projection.ProjectionError as exc:
         raise SkipFrame(f"camera {cam.name!r}: {exc}") from exc
+    # Cropped to a render region, the region is the screen: its rays that
+    # leave it find no pixel to read, as at the frame's edges.
+    proj = projection.window_projection(proj, win)
     view = projection.view_matrix(np.array(cam.matrix_world, dtype=np.float64))
-    return CameraInfo(proj, view, w, h, kind, cam.name)
+    return CameraInfo(proj, view, win.width, win.height, kind, cam.name)
+
+
+def render_window(render) -> projection.RenderWindow:
+    """The pixels ``scene.render`` produces: the whole frame, or the render region
+    when the render is cropped to it (*Crop to Render Region*). A render region
+    without the crop renders the whole frame's size, black outside it."""
+    crop = None
+    if render.use_border and render.use_crop_to_border:
+        crop = (render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y)
+    return projection.render_window(render.resolution_x, render.resolution_y, render.resolution_percentage, crop)
 
 
 # ----------------------------------------------------------------------------

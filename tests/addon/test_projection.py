@@ -34,6 +34,50 @@ def test_render_size_zero_is_an_error():
         p.render_size(1, 1, 1)
 
 
+def test_render_window_is_the_whole_frame_unless_cropped():
+    assert p.render_window(320, 180, 50) == p.RenderWindow(160, 90, 0, 0, 160, 90)
+
+
+def test_render_window_truncates_the_region_as_blender():
+    """Blender 3.4 rendered 333x187 at 77% cropped to x 0.1234-0.6789, y 0.2222-0.7777
+    as 142x80 (bpy, a PNG read back); the sides are float32 products truncated."""
+    win = p.render_window(333, 187, 77, (0.1234, 0.6789, 0.2222, 0.7777))
+    assert (win.full_width, win.full_height) == (256, 143)
+    assert (win.x0, win.y0, win.width, win.height) == (31, 31, 142, 80)
+    # bpy reads a border of 0.7 back as float32's 0.69999999: times 10 that truncates
+    # to 6 in float64, and is 7 in float32, as Blender multiplies
+    stored = float(np.float32(0.7))
+    assert int(stored * 10) == 6
+    assert p.render_window(10, 10, 100, (0.0, stored, 0.0, 1.0)).width == 7
+
+
+def test_a_render_region_under_a_pixel_is_an_error():
+    with pytest.raises(p.ProjectionError, match="render region of 0x"):
+        p.render_window(100, 100, 100, (0.5, 0.505, 0.0, 1.0))
+
+
+@pytest.mark.parametrize("make", [lambda: gl_perspective(1.1, 16 / 9, 0.1, 100), lambda: gl_ortho(4, 2.25, 0.1, 100)])
+def test_window_projection_puts_a_point_on_the_same_pixel(make):
+    """Through the narrowed projection a point lands on the window's pixel that is
+    the whole frame's pixel minus the window's corner, also with a lens shift."""
+    full = make()
+    full[0, 2] += 0.3  # shift, as calc_matrix_camera writes it (a perspective's; an ortho's is in [0, 3])
+    full[1, 3] += -0.2
+    win = p.RenderWindow(400, 225, 37, 101, 150, 61)
+    narrow = p.window_projection(full, win)
+    rng = np.random.default_rng(3)
+    pts = np.stack([rng.uniform(-3, 3, 50), rng.uniform(-2, 2, 50), rng.uniform(-20, -1, 50)], axis=-1)
+    def pixels(proj, w, h):
+        clip = np.c_[pts, np.ones(len(pts))] @ np.asarray(proj).T
+        ndc = clip[:, :2] / clip[:, 3:4]
+        return (ndc + 1.0) * 0.5 * np.array([w, h])
+    want = pixels(full, 400, 225) - np.array([37, 101])
+    assert np.allclose(pixels(narrow, 150, 61), want, atol=1e-9)
+    assert np.array_equal(narrow[2:], full[2:])  # depth and w untouched
+    whole = p.window_projection(full, p.RenderWindow(400, 225, 0, 0, 400, 225))
+    assert np.allclose(whole, full, atol=1e-15)
+
+
 def test_view_matrix_ignores_camera_scale():
     cam = np.eye(4)
     cam[:3, :3] = np.diag([2.0, 3.0, 0.5])

@@ -1,4 +1,4 @@
-"""Camera maths on numpy arrays: render size, view matrix, projection checks.
+"""Camera maths on numpy arrays: render size and window, view matrix, projection checks.
 
 The projection itself comes from Blender (``Object.calc_matrix_camera``); this
 module only checks it, builds the view transform the way Blender's renderers do
@@ -7,7 +7,8 @@ Blender's independent ``world_to_camera_view``.
 """
 from __future__ import annotations
 
-from typing import Tuple
+from dataclasses import dataclass
+from typing import Optional, Tuple
 
 import numpy as np
 
@@ -26,6 +27,52 @@ def render_size(resolution_x: int, resolution_y: int, percentage: int) -> Tuple[
     if w < 1 or h < 1:
         raise ProjectionError(f"render size {w}x{h}: expected at least 1x1 pixels")
     return w, h
+
+
+@dataclass(frozen=True)
+class RenderWindow:
+    """The pixels a render produces, inside its whole frame: columns [x0, x0 +
+    width) and rows [y0, y0 + height) of a full_width x full_height frame (row 0 at
+    the bottom). The whole frame, unless a render region is cropped to."""
+    full_width: int
+    full_height: int
+    x0: int
+    y0: int
+    width: int
+    height: int
+
+
+def render_window(resolution_x: int, resolution_y: int, percentage: int,
+                  crop: Optional[Tuple[float, float, float, float]] = None) -> RenderWindow:
+    """The window a render produces. ``crop``: the render region (border_min_x,
+    border_max_x, border_min_y, border_max_y, fractions of the frame) when the
+    render is cropped to it (*Crop to Render Region*), else None. Blender takes
+    each side as the float32 product of the fraction and the frame's size,
+    truncated (RE_InitState's disprect), and refuses a window under one pixel."""
+    w, h = render_size(resolution_x, resolution_y, percentage)
+    if crop is None:
+        return RenderWindow(w, h, 0, 0, w, h)
+    min_x, max_x, min_y, max_y = (np.float32(v) for v in crop)
+    x0, x1 = int(min_x * np.float32(w)), int(max_x * np.float32(w))
+    y0, y1 = int(min_y * np.float32(h)), int(max_y * np.float32(h))
+    if x1 - x0 < 1 or y1 - y0 < 1:
+        raise ProjectionError(f"render region of {x1 - x0}x{y1 - y0} pixels: expected at least 1x1")
+    return RenderWindow(w, h, x0, y0, x1 - x0, y1 - y0)
+
+
+def window_projection(projection, window: RenderWindow) -> np.ndarray:
+    """The whole frame's projection narrowed to ``window``: its clip space maps the
+    window's pixels to [-1, 1], so the window is a screen of its own (an off-axis
+    projection, as a camera's shift makes). A pixel centre of the window and the
+    same pixel of the whole frame see the same point."""
+    m = np.array(projection, dtype=np.float64).reshape(4, 4).copy()
+    fw, fh = float(window.full_width), float(window.full_height)
+    # whole-frame NDC x = a x' + b, x' the window's NDC (the same for y)
+    ax, bx = window.width / fw, (2.0 * window.x0 + window.width) / fw - 1.0
+    ay, by = window.height / fh, (2.0 * window.y0 + window.height) / fh - 1.0
+    m[0] = (m[0] - bx * m[3]) / ax
+    m[1] = (m[1] - by * m[3]) / ay
+    return m
 
 
 def normalized_camera_matrix(matrix_world) -> np.ndarray:
