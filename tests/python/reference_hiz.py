@@ -35,6 +35,7 @@ EDGE_FADE = _S.EDGE_FADE   # share of the screen over which visibility fades at 
 UNCERTAIN = _S.UNCERTAIN   # confidence of a hit located only to its texel, or at an outline texel's edge
 ENTERED_HIDDEN = _S.ENTERED_HIDDEN  # an occluder's hit channel when the ray came in by the hidden side
 HIDDEN_SHARE = _S.HIDDEN_SHARE  # deeper than this share of the thickness: came in from behind
+CROSSING_DEPTH = _S.CROSSING_DEPTH  # with the back layer: further than this many thicknesses is off it
 
 
 def edge_fade(uv: np.ndarray) -> np.ndarray:
@@ -372,15 +373,25 @@ def _texel(pos, planes, i, j, ta, tb, a0, a1, b0, b1, f0, d, w, h, plane_row, pl
     if not a_behind and not b_behind:
         return "pass", ta
     thick = texel_thickness(i, j)
+
+    def off(t, guessed=False):
+        """Further from the texel's own depth, in front or behind, than CROSSING_DEPTH
+        times its thickness: off the object, whatever its tangent plane says (edge-on
+        at a rounded object's outline). The back layer's thickness; the guessed one
+        too with ``guessed`` (a ray behind the plane, not a crossing of it)."""
+        return (thickness_known or guessed) and thick > 0 and abs(depth(t) + p[2]) > CROSSING_DEPTH * thick
+
     if not a_behind:
         f = min(max(ga / (ga - gb), 0.0), 1.0)
         t = _behind_convex_neighbours(pos, planes, i, j, u, tol, ta + (tb - ta) * f, tb, G_of, f0, d, w, h, thick)
-        return ("pass", ta) if t is None else ("hit on plane", t)
+        return ("pass", ta) if t is None or off(t) else ("hit on plane", t)
     t = _behind_convex_neighbours(pos, planes, i, j, u, tol, ta, tb, G_of, f0, d, w, h, thick)
     if t is None:
         return "pass", ta
     if t > ta:  # in front of a convex neighbour's plane when it entered: a crossing later, if any
-        return ("hit on plane", t) if G(t) < -tol * B(t) else ("pass", ta)
+        return ("hit on plane", t) if G(t) < -tol * B(t) and not off(t) else ("pass", ta)
+    if off(ta, guessed=True):
+        return "pass", ta
     L = plane_row(i, j)
     if L is None:
         return "hit", ta

@@ -31,6 +31,8 @@ UNCERTAIN = 0.5
 ENTERED_HIDDEN = -1.0
 # hiz: inside a texel's thickness, deeper than this share of it counts as entered from behind
 HIDDEN_SHARE = 0.5
+# hiz: further from a texel's depth than this many thicknesses is off its object
+CROSSING_DEPTH = 2.0
 # hiz: a texel's depth range at most this share of its view distance either way
 FOOTPRINT_SPREAD = 0.5
 # hiz: least cosine between normals of pixels that share a ray
@@ -68,6 +70,7 @@ CONSTANTS = {
     "UNCERTAIN": UNCERTAIN,
     "ENTERED_HIDDEN": ENTERED_HIDDEN,
     "HIDDEN_SHARE": HIDDEN_SHARE,
+    "CROSSING_DEPTH": CROSSING_DEPTH,
     "FOOTPRINT_SPREAD": FOOTPRINT_SPREAD,
     "REUSE_COS": REUSE_COS,
     "REUSE_DEPTH": REUSE_DEPTH,

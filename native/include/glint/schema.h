@@ -109,6 +109,13 @@ constexpr float kEnteredHidden = -1.0f;
 // the ray lies deeper behind the texel's own depth (flat, not along its
 // plane) than this share of the thickness.
 constexpr float kHiddenShare = 0.5f;
+// A ray further from a texel's own depth (in front or behind) than this many
+// times the texel's thickness is off the object there: it neither crosses nor
+// is inside it, whatever the texel's tangent plane says (at a rounded
+// object's outline that plane runs edge-on, spanning metres). A crossing is
+// held to the back layer's thickness alone, being behind the plane to the
+// guessed one too.
+constexpr float kCrossingDepth = 2.0f;
 // A texel's footprint range is clamped to its centre +- this share of its
 // view distance (plus its thickness): a plane seen edge-on would otherwise
 // reach infinity and make every cell above it overlap every ray.
@@ -187,6 +194,8 @@ inline constexpr Constant kConstants[] = {
      "hiz, blocked='occluder': the hit channel of a ray that came into an object by its hidden side"},
     {"HIDDEN_SHARE", Type::Float, hiz::kHiddenShare, nullptr,
      "hiz: inside a texel's thickness, deeper than this share of it counts as entered from behind"},
+    {"CROSSING_DEPTH", Type::Float, hiz::kCrossingDepth, nullptr,
+     "hiz: further from a texel's depth than this many thicknesses is off its object"},
     {"FOOTPRINT_SPREAD", Type::Float, hiz::kFootprintSpread, nullptr,
      "hiz: a texel's depth range at most this share of its view distance either way"},
     {"REUSE_COS", Type::Float, hiz::kReuseCos, nullptr,

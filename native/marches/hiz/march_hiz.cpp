@@ -45,6 +45,7 @@ constexpr float kBehindSlack = hiz::kBehindSlack;
 constexpr float kUncertain = hiz::kUncertain;
 constexpr float kEnteredHidden = hiz::kEnteredHidden;
 constexpr float kHiddenShare = hiz::kHiddenShare;
+constexpr float kCrossingDepth = hiz::kCrossingDepth;
 constexpr float kFootprintSpread = hiz::kFootprintSpread;
 // Levels of a pyramid over int-sized images: at most 31 halvings to 1x1.
 constexpr int kMaxLevels = 32;
@@ -270,6 +271,19 @@ bool behind_convex_neighbours(const Image& position, const HizPlanes& planes, co
   return true;
 }
 
+// Whether the ray at fraction t lies further from texel (i, j)'s own depth,
+// in front or behind, than kCrossingDepth times the texel's thickness: then
+// it is off the object there, and a crossing of the texel's plane, or being
+// behind it, is not a crossing of its surface or being inside it. At a
+// rounded object's outline the thickness falls to 0 while the tangent plane
+// turns edge-on and spans metres of depth across the texel: rays passing in
+// front of the object or behind it cross that plane. The thickness is the
+// back layer's, else `guess` (0: none, and nothing is off).
+bool off_the_object(const Image& position, const Image* back, float guess, const Ray& r, int i, int j, float t) {
+  const float tk = texel_thickness(position, back, guess, i, j);
+  return tk > 0.0f && std::fabs(r.depth(t) + position.px(i, j)[2]) > kCrossingDepth * tk;
+}
+
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
 // or it is behind the plane at the texel, where the texel's thickness says
 // whether that is solid. Being behind by no more than a rounding slack is a
@@ -296,6 +310,9 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
     if (!behind_convex_neighbours(position, planes, back, s.opt.thickness, r, i, j, pl, p, t_hit, tb, t))
       return TexelOutcome::Pass;
     t_hit = t;
+    // Only the back layer's thickness bounds a crossing: a grazing plane's
+    // depth spread across one texel can exceed a guessed one.
+    if (off_the_object(position, back, 0.0f, r, i, j, t_hit)) return TexelOutcome::Pass;
     return TexelOutcome::Hit;
   }
   // Behind the plane from the start, but maybe in front of a convex
@@ -306,12 +323,17 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
       return TexelOutcome::Pass;
     if (t > ta) {
       if (!(r.plane(t, pl.u, pl.np) < -pl.tol * r.b(t))) return TexelOutcome::Pass;  // back in front by then
+      if (off_the_object(position, back, 0.0f, r, i, j, t)) return TexelOutcome::Pass;
       t_hit = t;
       located = true;
       return TexelOutcome::Hit;
     }
   }
-  // Behind from the start: how far, in view distance, at either end.
+  // Behind from the start: how far, in view distance, at either end. Not
+  // inside the object, though, when far from the texel's own depth
+  // (off_the_object(): behind an edge-on plane is not behind the surface),
+  // by the thickness the tests below take, guessed or known.
+  if (off_the_object(position, back, s.opt.thickness, r, i, j, ta)) return TexelOutcome::Pass;
   float L[4];
   if (!texel_plane(position, planes, cam, i, j, L)) return TexelOutcome::Hit;
   const float thick = texel_thickness(position, back, s.opt.thickness, i, j);
