@@ -280,10 +280,9 @@ def render_frame_size(scene) -> Optional[Tuple[int, int]]:
     it renders nothing (a percentage or a cropped render region that leaves no
     pixel)."""
     try:
-        win = gather.render_window(scene.render)
+        return gather.render_window(scene.render).image_size
     except projection.ProjectionError:
         return None
-    return win.width, win.height
 
 
 def scene_reflectors(scene) -> Tuple[int, bool]:

@@ -21,7 +21,7 @@ import numpy as np
 
 from . import compositor, exact_cache, gather, native
 from .host import nodes as host_nodes
-from .logic import compositing, geometry, group_images, reduced, settings as settings_logic, texels
+from .logic import compositing, geometry, group_images, projection, reduced, settings as settings_logic, texels
 from .logic import world as world_logic
 from .logic.progress import Cancelled, Progress, Timings
 from .state import STATE, FrameReport, log
@@ -239,6 +239,11 @@ def _rasterize_and_trace(frame: FrameState, size) -> bool:
             lambda b: rasterize(core, exp, b, frame.back_layer, size, albedo), frame.backend, frame.requested, log)
     frame.progress.check()
     position, normal, specular = gbuf["position"], gbuf["normal"], gbuf["specular"]
+    if exp.camera.rendered is not None:
+        # Outside a render region the engine renders nothing: no reflection
+        # to add there, so no ray to trace (on 5.x the compositor would
+        # composite one over the black).
+        specular = projection.zero_outside(specular, exp.camera.rendered)
     report.backend = used
     if frame.back_layer:
         kw["back_position"] = gbuf["back_position"]

@@ -44,12 +44,16 @@ class CameraInfo:
     height: int
     kind: str  # perspective / orthographic
     name: str
+    # A render region not cropped to: the pixels the engine renders (the rest
+    # of the frame stays black, and Glint leaves it so).
+    rendered: Optional[projection.RenderWindow] = None
 
 
 def camera(depsgraph) -> CameraInfo:
     """The render camera's projection (``calc_matrix_camera`` at the render's size,
     pixel aspect and percentage; shift and sensor fit included; narrowed to the
-    render region when the render is cropped to it) and view matrix."""
+    render region when the render is cropped to it) and view matrix; with a render
+    region not cropped to, where the engine renders (``rendered``)."""
     scene = depsgraph.scene_eval
     cam = scene.camera
     if cam is None:
@@ -70,21 +74,24 @@ def camera(depsgraph) -> CameraInfo:
         kind = projection.classify_projection(proj)
     except projection.ProjectionError as exc:
         raise SkipFrame(f"camera {cam.name!r}: {exc}") from exc
+    view = projection.view_matrix(np.array(cam.matrix_world, dtype=np.float64))
+    if not win.cropped:  # the whole frame, and where the engine renders it
+        whole = (win.width, win.height) == (win.full_width, win.full_height)
+        return CameraInfo(proj, view, win.full_width, win.full_height, kind, cam.name, None if whole else win)
     # Cropped to a render region, the region is the screen: its rays that
     # leave it find no pixel to read, as at the frame's edges.
     proj = projection.window_projection(proj, win)
-    view = projection.view_matrix(np.array(cam.matrix_world, dtype=np.float64))
     return CameraInfo(proj, view, win.width, win.height, kind, cam.name)
 
 
 def render_window(render) -> projection.RenderWindow:
-    """The pixels ``scene.render`` produces: the whole frame, or the render region
-    when the render is cropped to it (*Crop to Render Region*). A render region
-    without the crop renders the whole frame's size, black outside it."""
-    crop = None
-    if render.use_border and render.use_crop_to_border:
-        crop = (render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y)
-    return projection.render_window(render.resolution_x, render.resolution_y, render.resolution_percentage, crop)
+    """The pixels ``scene.render`` produces: the whole frame, or its render region
+    (*Render Region*), cropped to or not (*Crop to Render Region*)."""
+    region = None
+    if render.use_border:
+        region = (render.border_min_x, render.border_max_x, render.border_min_y, render.border_max_y)
+    return projection.render_window(render.resolution_x, render.resolution_y, render.resolution_percentage, region,
+                                    render.use_crop_to_border)
 
 
 # ----------------------------------------------------------------------------

@@ -51,6 +51,27 @@ def test_render_window_truncates_the_region_as_blender():
     assert p.render_window(10, 10, 100, (0.0, stored, 0.0, 1.0)).width == 7
 
 
+def test_a_render_region_hands_the_compositor_its_own_size_only_when_cropped():
+    region = (0.25, 0.75, 0.5, 1.0)
+    assert p.render_window(100, 40, 100, region).image_size == (100, 40)
+    assert p.render_window(100, 40, 100, region, crop=True).image_size == (50, 20)
+
+
+@pytest.mark.parametrize("size", [(100, 40), (50, 20), (33, 13)])
+def test_zero_outside_keeps_the_pixels_whose_centres_lie_in_the_window(size):
+    """At the frame's size and at reduced ones (the add-on's memory fallback), a
+    pixel stays where its centre, in the frame's pixels, lies in the window."""
+    win = p.render_window(100, 40, 100, (0.25, 0.75, 0.5, 1.0))  # columns 25..74, rows 20..39
+    w, h = size
+    img = np.ones((h, w, 4), np.float32)
+    out = p.zero_outside(img, win)
+    cx = (np.arange(w) + 0.5) * 100 / w
+    cy = (np.arange(h) + 0.5) * 40 / h
+    want = ((cy >= 20) & (cy < 40))[:, None] & ((cx >= 25) & (cx < 75))[None, :]
+    assert np.array_equal(out[..., 0] == 1, want)
+    assert img.all()  # a copy
+
+
 def test_a_render_region_under_a_pixel_is_an_error():
     with pytest.raises(p.ProjectionError, match="render region of 0x"):
         p.render_window(100, 100, 100, (0.5, 0.505, 0.0, 1.0))

@@ -54,7 +54,7 @@ def whole(blender, samples, session_dir):
 def test_a_render_region_composites_the_whole_frames_reflections_there(blender, samples, session_dir, whole, crop):
     plain, change = renders(blender, samples, session_dir, crop)
     whole_plain, whole_change = whole
-    win = projection.render_window(*SIZE, 100, BORDER)
+    win = projection.render_window(*SIZE, 100, BORDER, crop)
     rows, cols = slice(win.y0, win.y0 + win.height), slice(win.x0, win.x0 + win.width)
     if crop:
         assert plain.shape[:2] == (win.height, win.width)

@@ -33,31 +33,54 @@ def render_size(resolution_x: int, resolution_y: int, percentage: int) -> Tuple[
 class RenderWindow:
     """The pixels a render produces, inside its whole frame: columns [x0, x0 +
     width) and rows [y0, y0 + height) of a full_width x full_height frame (row 0 at
-    the bottom). The whole frame, unless a render region is cropped to."""
+    the bottom), and whether the render's image is cropped to them. The whole frame
+    when there is no render region."""
     full_width: int
     full_height: int
     x0: int
     y0: int
     width: int
     height: int
+    cropped: bool = False
+
+    @property
+    def image_size(self) -> Tuple[int, int]:
+        """The size of the image the render hands the compositor: the window's when
+        cropped to it, else the whole frame's (black outside the window)."""
+        return (self.width, self.height) if self.cropped else (self.full_width, self.full_height)
 
 
 def render_window(resolution_x: int, resolution_y: int, percentage: int,
-                  crop: Optional[Tuple[float, float, float, float]] = None) -> RenderWindow:
-    """The window a render produces. ``crop``: the render region (border_min_x,
-    border_max_x, border_min_y, border_max_y, fractions of the frame) when the
-    render is cropped to it (*Crop to Render Region*), else None. Blender takes
-    each side as the float32 product of the fraction and the frame's size,
-    truncated (RE_InitState's disprect), and refuses a window under one pixel."""
+                  region: Optional[Tuple[float, float, float, float]] = None, crop: bool = False) -> RenderWindow:
+    """The window a render produces. ``region``: the render region (border_min_x,
+    border_max_x, border_min_y, border_max_y, fractions of the frame) when one is
+    set, else None; ``crop``: the image is cropped to it (*Crop to Render
+    Region*). Blender takes each side as the float32 product of the fraction and
+    the frame's size, truncated (RE_InitState's disprect), and refuses a window
+    under one pixel."""
     w, h = render_size(resolution_x, resolution_y, percentage)
-    if crop is None:
+    if region is None:
         return RenderWindow(w, h, 0, 0, w, h)
-    min_x, max_x, min_y, max_y = (np.float32(v) for v in crop)
+    min_x, max_x, min_y, max_y = (np.float32(v) for v in region)
     x0, x1 = int(min_x * np.float32(w)), int(max_x * np.float32(w))
     y0, y1 = int(min_y * np.float32(h)), int(max_y * np.float32(h))
     if x1 - x0 < 1 or y1 - y0 < 1:
         raise ProjectionError(f"render region of {x1 - x0}x{y1 - y0} pixels: expected at least 1x1")
-    return RenderWindow(w, h, x0, y0, x1 - x0, y1 - y0)
+    return RenderWindow(w, h, x0, y0, x1 - x0, y1 - y0, bool(crop))
+
+
+def zero_outside(image: np.ndarray, window: RenderWindow) -> np.ndarray:
+    """``image`` (the whole frame at its size or a reduced one, [h, w, ...]) with
+    the pixels whose centres fall outside ``window`` set to 0, a copy."""
+    out = np.array(image, copy=True)
+    h, w = out.shape[:2]
+    # pixel x's centre (x + 0.5) / w of the frame lies in [x0, x0 + width) / full_width
+    cols = (2 * np.arange(w) + 1) * window.full_width
+    rows = (2 * np.arange(h) + 1) * window.full_height
+    keep_x = (cols >= 2 * window.x0 * w) & (cols < 2 * (window.x0 + window.width) * w)
+    keep_y = (rows >= 2 * window.y0 * h) & (rows < 2 * (window.y0 + window.height) * h)
+    out[~(keep_y[:, None] & keep_x[None, :])] = 0
+    return out
 
 
 def window_projection(projection, window: RenderWindow) -> np.ndarray:
