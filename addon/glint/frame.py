@@ -360,7 +360,7 @@ def _fill_images(frame: FrameState, uv, weight, hidden, position, normal, specul
     # The core's bin means where it has them (a core from before: None, the rule in numpy).
     bin_means = getattr(frame.core, "positive_bin_means", None)
     images = group_images.region_images(uv, weight, region, offset,
-                                       fine=not host_nodes.coarse_read_back_by_scale(), bin_means=bin_means)
+                                        fine=not host_nodes.coarse_read_back_by_scale(), bin_means=bin_means)
     images.update(hidden_imgs)
     frame.report.region = region
     if view in compositing.GBUFFER_DEBUG_VIEWS:
