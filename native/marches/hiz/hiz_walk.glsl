@@ -210,11 +210,8 @@ bool behind_convex_neighbours(ivec2 c, vec3 u, float tol, vec3 p, float t0, floa
   return true;
 }
 
-// off_the_object() in march_hiz.cpp; guess: the thickness where the back
-// layer gives none (0: none).
-bool off_the_object(ivec2 c, float pz, float t, float guess) {
-  float tk = known_thickness(c, -pz);
-  tk = tk > 0.0 ? tk : guess;
+// off_the_object() in march_hiz.cpp.
+bool off_the_object(float pz, float tk, float t) {
   precise float off = ray_depth(t) + pz;
   precise float limit = CROSSING_DEPTH * tk;
   return tk > 0.0 && abs(off) > limit;
@@ -247,7 +244,7 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
     float tc;
     if (!behind_convex_neighbours(c, u, tol, p, th, tb, tc)) return PASS;
     t_hit = tc;
-    if (off_the_object(c, p.z, tc, 0.0)) return PASS;
+    if (off_the_object(p.z, known_thickness(c, -p.z), tc)) return PASS;
     return HIT;
   }
   {
@@ -257,16 +254,16 @@ int texel_hit(ivec2 c, float ta, float tb, out float t_hit, out bool located, ou
       float gc = ray_plane(tc, u, np);
       precise float lc = -tol * ray_b(tc);
       if (!(gc < lc)) return PASS;
-      if (off_the_object(c, p.z, tc, 0.0)) return PASS;
+      if (off_the_object(p.z, known_thickness(c, -p.z), tc)) return PASS;
       t_hit = tc;
       located = true;
       return HIT;
     }
   }
-  if (off_the_object(c, p.z, ta, u_thickness)) return PASS;
+  float thick = texel_thickness(c, -p.z);
+  if (off_the_object(p.z, thick, ta)) return PASS;
   vec4 L;
   if (!texel_plane(n, p, L)) return HIT;
-  float thick = texel_thickness(c, -p.z);
   precise float sxs = 2.0 / u_size.x;
   precise float sys = 2.0 / u_size.y;
   precise float slack = BEHIND_SLACK * abs(p.z);

@@ -277,11 +277,10 @@ bool behind_convex_neighbours(const Image& position, const HizPlanes& planes, co
 // behind it, is not a crossing of its surface or being inside it. At a
 // rounded object's outline the thickness falls to 0 while the tangent plane
 // turns edge-on and spans metres of depth across the texel: rays passing in
-// front of the object or behind it cross that plane. The thickness is the
-// back layer's, else `guess` (0: none, and nothing is off).
-bool off_the_object(const Image& position, const Image* back, float guess, const Ray& r, int i, int j, float t) {
-  const float tk = texel_thickness(position, back, guess, i, j);
-  return tk > 0.0f && std::fabs(r.depth(t) + position.px(i, j)[2]) > kCrossingDepth * tk;
+// front of the object or behind it cross that plane. `pz`: the texel's view
+// z; `tk`: its thickness (0 or less: none known, and nothing is off).
+bool off_the_object(const Ray& r, float pz, float tk, float t) {
+  return tk > 0.0f && std::fabs(r.depth(t) + pz) > kCrossingDepth * tk;
 }
 
 // The ray crosses the texel's plane from the front (t_hit: that crossing),
@@ -312,7 +311,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
     t_hit = t;
     // Only the back layer's thickness bounds a crossing: a grazing plane's
     // depth spread across one texel can exceed a guessed one.
-    if (off_the_object(position, back, 0.0f, r, i, j, t_hit)) return TexelOutcome::Pass;
+    if (off_the_object(r, p[2], known_thickness(position, back, i, j), t_hit)) return TexelOutcome::Pass;
     return TexelOutcome::Hit;
   }
   // Behind the plane from the start, but maybe in front of a convex
@@ -323,7 +322,7 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
       return TexelOutcome::Pass;
     if (t > ta) {
       if (!(r.plane(t, pl.u, pl.np) < -pl.tol * r.b(t))) return TexelOutcome::Pass;  // back in front by then
-      if (off_the_object(position, back, 0.0f, r, i, j, t)) return TexelOutcome::Pass;
+      if (off_the_object(r, p[2], known_thickness(position, back, i, j), t)) return TexelOutcome::Pass;
       t_hit = t;
       located = true;
       return TexelOutcome::Hit;
@@ -333,10 +332,10 @@ TexelOutcome texel_hit(const MarchSetup& s, const HizPlanes& planes, const HizCa
   // inside the object, though, when far from the texel's own depth
   // (off_the_object(): behind an edge-on plane is not behind the surface),
   // by the thickness the tests below take, guessed or known.
-  if (off_the_object(position, back, s.opt.thickness, r, i, j, ta)) return TexelOutcome::Pass;
+  const float thick = texel_thickness(position, back, s.opt.thickness, i, j);
+  if (off_the_object(r, p[2], thick, ta)) return TexelOutcome::Pass;
   float L[4];
   if (!texel_plane(position, planes, cam, i, j, L)) return TexelOutcome::Hit;
-  const float thick = texel_thickness(position, back, s.opt.thickness, i, j);
   const float w = static_cast<float>(position.width), h = static_cast<float>(position.height);
   auto behind_by = [&](float t) {
     const float sx = (r.f0[0] + t * r.d[0]) * (2.0f / w) - 1.0f;
