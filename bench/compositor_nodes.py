@@ -38,7 +38,7 @@ import blender_scene_kit as kit  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "addon"))
 from glint import host  # noqa: E402  (the compositor tree of this Blender)
-from glint.logic import group_images  # noqa: E402  (the coarse canvas's grid)
+from glint.logic import compositing, group_images  # noqa: E402  (the fine image's name, the coarse canvas's grid)
 
 
 def _args():
@@ -69,7 +69,7 @@ def _scene(size):
     cw, ch = group_images.coarse_size(w, h)
     _image("bench coarse", rng.random((ch, cw, 4)))
     grid = group_images.coarse_images(np.zeros((h, w), np.float32), (0, 0, w, h), w, h)
-    _image("bench fine", grid[group_images.IMAGE_FINE])
+    _image("bench fine", grid[compositing.IMAGE_FINE])
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     uv = np.ones((h, w, 4), np.float32)
     uv[..., 0] = (xx + 0.5) / w  # a smooth uv: Map UV's filter footprint stays a pixel
