@@ -319,8 +319,11 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
           if (!dx && !dy) continue;
           const float* q = uv.px(x + dx, y + dy);
           const float du = (q[0] - t[0]) * fw, dv = (q[1] - t[1]) * fh;
-          inside = q[2] > 0.0f && du * du + dv * dv <= hiz::kReusePixels * hiz::kReusePixels;
-          beside_hidden = beside_hidden || q[3] == hiz::kEnteredHidden;
+          // A hidden side's report is the texel the ray entered, a few texels
+          // behind the rim the pixel hit: any distance is the same object's.
+          const bool entered = q[3] == hiz::kEnteredHidden;
+          inside = q[2] > 0.0f && (entered || du * du + dv * dv <= hiz::kReusePixels * hiz::kReusePixels);
+          beside_hidden = beside_hidden || entered;
         }
       if (!inside) continue;
       int i = 0, j = 0;

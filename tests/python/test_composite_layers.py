@@ -230,9 +230,10 @@ def test_hidden_sides_take_the_back_surfaces_albedo():
 def settle_reference(uv, hidden, back_albedo):
     """docs/hiz.md, *Uncertain shares inside a reflection*, pixel by pixel:
     a hit under its screen-edge fade whose eight neighbours all report
-    something within REUSE_PIXELS of its hit gives the rest of the fade to the
-    hidden side when a neighbour entered one (and its hit's texel has a back
-    surface), else to itself. Decided on the uv as given."""
+    something, within REUSE_PIXELS of its hit unless it is a hidden side
+    entered, gives the rest of the fade to the hidden side when a neighbour
+    entered one (and its hit's texel has a back surface), else to itself.
+    Decided on the uv as given."""
     const = glint_core.schema()["constants"]
     entered, reach, edge_fade = const["ENTERED_HIDDEN"], const["REUSE_PIXELS"], const["EDGE_FADE"]
     h, w = uv.shape[:2]
@@ -254,7 +255,8 @@ def settle_reference(uv, hidden, back_albedo):
             if not vis < fade * f32(0.999):
                 continue
             near = [uv[y + dy, x + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
-            if not all(q[2] > 0 and ((q[0] - u) * f32(w)) ** 2 + ((q[1] - v) * f32(h)) ** 2 <= f32(reach) ** 2
+            if not all(q[2] > 0 and (q[3] == entered
+                                     or ((q[0] - u) * f32(w)) ** 2 + ((q[1] - v) * f32(h)) ** 2 <= f32(reach) ** 2)
                        for q in near):
                 continue
             i, j = int(np.floor(u * f32(w))), int(np.floor(v * f32(h)))
@@ -291,6 +293,12 @@ def test_uncertain_shares_go_to_the_hidden_side_or_the_hit():
     assert count == 1 and np.isclose(uv[3, 4, 2], 0.6) and np.allclose(hid[3, 4], (0.24, 0.12, 0.08, 0.4))
     uv, hid, count = glint_core.settle_uncertain_shares(block(), zeros, albedo)
     assert count == 0 and uv[3, 4, 2] == uv[3, 4, 3] == 1.0 and not hid.any()
+    # A hidden side's report is the texel its ray entered, texels behind the
+    # rim: it counts at any distance (an antialiased line between the two sides).
+    far_entered = block(tag=entered)
+    far_entered[2, 3, 1] += 5.0 / h
+    uv, hid, count = glint_core.settle_uncertain_shares(far_entered, zeros, albedo)
+    assert count == 1 and np.allclose(hid[3, 4], (0.24, 0.12, 0.08, 0.4))
     for case in ("miss", "far", "edge"):
         before = block(tag=entered)
         if case == "miss":
@@ -302,7 +310,7 @@ def test_uncertain_shares_go_to_the_hidden_side_or_the_hit():
             before[3, 4, 2:] = np.float32(0.5 / h) / np.float32(0.075)
         uv, hid, count = glint_core.settle_uncertain_shares(before, zeros, albedo)
         assert count == 0 and np.array_equal(uv, before) and not hid.any(), case
-    for case in (block(tag=entered), block()):
+    for case in (block(tag=entered), block(), far_entered):
         want_uv, want_hid = settle_reference(case, zeros, albedo)
         uv, hid, _ = glint_core.settle_uncertain_shares(case, zeros, albedo)
         assert np.array_equal(uv, want_uv) and np.array_equal(hid, want_hid)

@@ -88,9 +88,11 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
 // What the hiz march was unsure of, settled from the pixel's neighbours
 // (docs/hiz.md, *Uncertain shares inside a reflection*). A hit with
 // visibility under its screen-edge fade (an outline texel's confidence: the
-// ray may have passed beside the object there) whose eight neighbours all
-// report something within hiz::kReusePixels of its hit lies inside its
-// reflection, so its ray cannot have passed into the open: where a neighbour
+// ray may have passed beside the object there; or an antialiased pixel some of
+// whose rays entered a hidden side) whose eight neighbours all report
+// something within hiz::kReusePixels of its hit (a hidden side entered at any
+// distance: it reports the texel its ray entered, texels behind the rim) lies
+// inside its reflection, so its ray cannot have passed into the open: where a neighbour
 // came in by the object's hidden side (and the hit's texel has a back
 // surface), the rest of the fade goes to that side, in `hidden` as
 // (albedo x share / fade, share): a compositor weighs the hidden colour by the
