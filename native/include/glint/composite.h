@@ -88,8 +88,7 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
 // What the hiz march was unsure of, settled from the pixel's neighbours
 // (docs/hiz.md, *Uncertain shares inside a reflection*). A hit with
 // visibility under its screen-edge fade (an outline texel's confidence: the
-// ray may have passed beside the object there; or an antialiased pixel some of
-// whose rays entered a hidden side) whose eight neighbours all report
+// ray may have passed beside the object there) whose eight neighbours all report
 // something within hiz::kReusePixels of its hit (a hidden side entered at any
 // distance: it reports the texel its ray entered, texels behind the rim) lies
 // inside its reflection, so its ray cannot have passed into the open: where a neighbour

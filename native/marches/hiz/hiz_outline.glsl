@@ -39,20 +39,11 @@ uint invocation_index() {
 ivec2 unpack_pixel(uint p) { return ivec2(int(p & 0xffffu), int(p >> 16)); }
 
 // report_of() in native/src/cpu/outline.h: a hit (visibility in the fourth channel), a
-// plain miss, a hidden side entered (ENTERED_HIDDEN), or anything else (an
-// occluder found late), left as it is.
+// plain miss, or anything else (a blocked ray's occluder), left as it is.
 const int REPORT_MISS = 0;
 const int REPORT_HIT = 1;
 const int REPORT_OTHER = 2;
-const int REPORT_ENTERED = 3;
 int report_of(vec4 o) {
   if (o.w > 0.0) return REPORT_HIT;
-  if (o.w == ENTERED_HIDDEN) return REPORT_ENTERED;
   return o.z == 0.0 && o.w == 0.0 ? REPORT_MISS : REPORT_OTHER;
-}
-
-// opposite_reports() in native/src/cpu/outline.h: a hit against a miss or a
-// hidden side entered, the pairs a pixel's rays can resolve.
-bool opposite_reports(int a, int b) {
-  return a == REPORT_HIT ? (b == REPORT_MISS || b == REPORT_ENTERED) : (b == REPORT_HIT && a != REPORT_OTHER);
 }

@@ -3,7 +3,7 @@
 // native/src/cpu/outline.cpp, same tests on the same values): every pixel of the traced
 // frame, the outline's appended to hiz_outline.glsl's list. A pixel is on a
 // reflection's outline when its report is a hit and a neighbour's on the
-// same surface a miss or a hidden side entered, or the other way round. The reports are compared
+// same surface a miss, or the other way round. The reports are compared
 // first, so most pixels never read the G-buffer. A pixel whose reflection
 // the cone blur spreads over more than a pixel there is not listed (the
 // blur smooths that edge already). Rows of 64 pixels per group, as
@@ -41,10 +41,11 @@ bool same_surface(vec4 p, vec3 n, ivec2 q) {
   return d > 0.0 && dd >= need;
 }
 
-// Neighbour q is in the frame and its report is opposite to r.
+// Neighbour q is in the frame and reports a hit or a miss other than r.
 bool differs(ivec2 q, int r) {
   if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) return false;
-  return opposite_reports(r, report_of(imageLoad(u_out, q)));
+  int rq = report_of(imageLoad(u_out, q));
+  return rq != REPORT_OTHER && rq != r;
 }
 
 // cone_lod_at() > 0 (glint/material.h, as cone_blur.frag computes it): the

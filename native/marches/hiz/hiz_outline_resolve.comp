@@ -2,10 +2,9 @@
 // The hiz march's antialiased outlines, last pass (resolve_outline() in
 // native/src/cpu/outline.cpp, same operations in the same order): an invocation per
 // listed pixel of the batch (hiz_outline.glsl), its report in the frame
-// replaced by the box filter of its centre and its u_per_pixel samples, a
-// hidden side entered counting as no hit. Only where every hit lies within
-// REUSE_PIXELS of the first and nothing but hits, misses and hidden sides was
-// reported; elsewhere the centre's report stays.
+// replaced by the box filter of its centre and its u_per_pixel samples. Only
+// where every hit lies within REUSE_PIXELS of the first and nothing but hits
+// and misses was reported; elsewhere the centre's report stays.
 #include "common.glsl"
 #include "hiz_outline.glsl"
 
@@ -18,7 +17,7 @@ uniform vec2 u_size;  // float(width), float(height)
 // One report into the sums: false where it stops the filter.
 bool add(vec4 s, vec4 ref, inout float su, inout float sv, inout float sw) {
   int r = report_of(s);
-  if (r != REPORT_HIT) return r == REPORT_MISS || r == REPORT_ENTERED;
+  if (r != REPORT_HIT) return r == REPORT_MISS;
   precise float du = (s.x - ref.x) * u_size.x;
   precise float dv = (s.y - ref.y) * u_size.y;
   precise float dist2 = du * du + dv * dv;
