@@ -301,8 +301,15 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
     throw InvalidArgument("hidden", "expected the trace's size " + std::to_string(w) + "x" + std::to_string(h));
   const float fw = static_cast<float>(w), fh = static_cast<float>(h);
   // Decided on the trace as it came, then applied: a pixel's neighbours are
-  // read before any of them changes.
+  // read before any of them changes. ToHidden + 1 + k: the hidden side's
+  // albedo is that of neighbour k's texel (kAround[k]), the one its ray
+  // entered, where the hit's own texel has no back surface (a rim texel the
+  // back layer does not cover). Those neighbours are never written.
   enum : unsigned char { Keep, ToHit, ToHidden };
+  static constexpr int kAround[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0}, {1, 0}, {-1, 1}, {0, 1}, {1, 1}};
+  const auto back_at = [&](const float* t, int& i, int& j) {
+    return uv.texel_at(t[0] * fw, t[1] * fh, i, j) && back_albedo.px(i, j)[3] > 0.0f;
+  };
   Mask action(uv.pixel_count());
   parallel_rows(0, h, threads, [&](int y) {
     for (int x = 0; x < w; ++x) {
@@ -314,21 +321,23 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
       if (!(t[2] < fade * kSettledShare)) continue;  // sure of itself, to the rounding
       if (x == 0 || y == 0 || x == w - 1 || y == h - 1) continue;
       bool inside = true, beside_hidden = false;
-      for (int dy = -1; dy <= 1 && inside; ++dy)
-        for (int dx = -1; dx <= 1 && inside; ++dx) {
-          if (!dx && !dy) continue;
-          const float* q = uv.px(x + dx, y + dy);
-          const float du = (q[0] - t[0]) * fw, dv = (q[1] - t[1]) * fh;
-          // A hidden side's report is the texel the ray entered, a few texels
-          // behind the rim the pixel hit: any distance is the same object's.
-          const bool entered = q[3] == hiz::kEnteredHidden;
-          inside = q[2] > 0.0f && (entered || du * du + dv * dv <= hiz::kReusePixels * hiz::kReusePixels);
-          beside_hidden = beside_hidden || entered;
-        }
+      int entered_back = -1;  // the first entered neighbour whose texel has a back surface
+      for (int k = 0; k < 8 && inside; ++k) {
+        const float* q = uv.px(x + kAround[k][0], y + kAround[k][1]);
+        const float du = (q[0] - t[0]) * fw, dv = (q[1] - t[1]) * fh;
+        // A hidden side's report is the texel the ray entered, a few texels
+        // behind the rim the pixel hit: any distance is the same object's.
+        const bool entered = q[3] == hiz::kEnteredHidden;
+        inside = q[2] > 0.0f && (entered || du * du + dv * dv <= hiz::kReusePixels * hiz::kReusePixels);
+        beside_hidden = beside_hidden || entered;
+        int i = 0, j = 0;
+        if (entered && entered_back < 0 && back_at(q, i, j)) entered_back = k;
+      }
       if (!inside) continue;
       int i = 0, j = 0;
-      const bool has_back = uv.texel_at(t[0] * fw, t[1] * fh, i, j) && back_albedo.px(i, j)[3] > 0.0f;
-      a = beside_hidden && has_back ? ToHidden : ToHit;
+      if (!beside_hidden) a = ToHit;
+      else if (back_at(t, i, j)) a = ToHidden;
+      else a = entered_back >= 0 ? static_cast<unsigned char>(ToHidden + 1 + entered_back) : ToHit;
     }
   });
   std::atomic<uint64_t> total{0};
@@ -344,7 +353,13 @@ uint64_t settle_uncertain_shares(Image& uv, Image& hidden, const Image& back_alb
         continue;
       }
       int i = 0, j = 0;
-      uv.texel_at(t[0] * fw, t[1] * fh, i, j);
+      if (a == ToHidden) {
+        uv.texel_at(t[0] * fw, t[1] * fh, i, j);
+      } else {
+        const int* d = kAround[a - ToHidden - 1];
+        const float* q = uv.px(x + d[0], y + d[1]);
+        uv.texel_at(q[0] * fw, q[1] * fh, i, j);
+      }
       const float* alb = back_albedo.px(i, j);
       const float share = fade - t[2];
       float* o = hidden.px(x, y);

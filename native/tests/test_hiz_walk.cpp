@@ -315,17 +315,71 @@ TEST(HizWalk, ReportRowMatchesReportOfPixelByPixel) {
     }
     std::vector<unsigned char> bytes(static_cast<size_t>(width), 7);
     cpu::report_row(row.data(), width, bytes.data());
-    int differ = 0, hits = 0, misses = 0;
+    int differ = 0, hits = 0, misses = 0, entered = 0;
     for (int x = 0; x < width; ++x) {
       const cpu::Report r = cpu::report_of(row.data() + 4 * x);
       differ += bytes[x] != static_cast<unsigned char>(r);
       hits += r == cpu::Report::Hit;
       misses += r == cpu::Report::Miss;
+      entered += r == cpu::Report::Entered;
     }
     EXPECT_EQ(differ, 0) << "width " << width;
     // The values reach every kind of report, so that equal bytes mean something.
-    if (width >= 100) EXPECT_TRUE(hits > 0 && misses > 0 && hits + misses < width) << width;
+    if (width >= 100) EXPECT_TRUE(hits > 0 && misses > 0 && entered > 0 && hits + misses + entered < width) << width;
   }
+}
+
+// The byte test the outline search runs on whole rows is the rule it
+// stands for: a hit against a miss or a hidden side entered, either way round,
+// and nothing against an occluder found late.
+TEST(HizWalk, OppositeReportsAreAHitAgainstAMissOrAHiddenSide) {
+  using cpu::Report;
+  const Report kinds[] = {Report::Miss, Report::Hit, Report::Other, Report::Entered};
+  for (Report a : kinds)
+    for (Report b : kinds) {
+      const bool want = (a == Report::Hit && (b == Report::Miss || b == Report::Entered)) ||
+                        (b == Report::Hit && (a == Report::Miss || a == Report::Entered));
+      EXPECT_EQ(cpu::opposite_reports(static_cast<unsigned char>(a), static_cast<unsigned char>(b)), want)
+          << static_cast<int>(a) << " " << static_cast<int>(b);
+    }
+}
+
+// A pixel's rays resolved: the hits' share is its visibility and their mean
+// its uv; beside a hidden side, the first hit's uv; a miss and a hidden side
+// both seen leave the centre's report.
+TEST(HizWalk, ResolvedOutlinePixelsShareTheirHits) {
+  const float w = 100.0f, h = 50.0f;
+  const float centre[4] = {0.500f, 0.500f, 1.0f, 1.0f};
+  const float samples[4][4] = {{0.520f, 0.500f, 1.0f, 1.0f},
+                               {0.0f, 0.0f, 0.0f, 0.0f},
+                               {0.510f, 0.520f, 0.5f, 0.5f},
+                               {0.0f, 0.0f, 0.0f, 0.0f}};
+  float o[4];
+  cpu::resolve_outline(centre, &samples[0][0], 4, w, h, o);
+  EXPECT_FLOAT_EQ(o[2], 2.5f / 5.0f);
+  EXPECT_FLOAT_EQ(o[3], 2.5f / 5.0f);
+  EXPECT_FLOAT_EQ(o[0], (0.500f + 0.520f + 0.5f * 0.510f) / 2.5f);
+  cpu::resolve_outline(centre, &samples[0][0], 4, w, h, o, true);
+  EXPECT_FLOAT_EQ(o[0], 0.500f);
+  EXPECT_FLOAT_EQ(o[1], 0.500f);
+  EXPECT_FLOAT_EQ(o[2], 2.5f / 5.0f);
+  // Hidden sides in place of the misses: the same share, one hit's uv.
+  float entered[4][4];
+  std::memcpy(entered, samples, sizeof entered);
+  for (int j : {1, 3}) {
+    entered[j][0] = entered[j][1] = 0.3f;
+    entered[j][2] = 1.0f;
+    entered[j][3] = hiz::kEnteredHidden;
+  }
+  cpu::resolve_outline(centre, &entered[0][0], 4, w, h, o);
+  EXPECT_FLOAT_EQ(o[0], 0.500f);
+  EXPECT_FLOAT_EQ(o[2], 2.5f / 5.0f);
+  // One of each: the centre's report stays (resolved in place, as the marches do).
+  entered[3][2] = entered[3][3] = 0.0f;
+  std::memcpy(o, centre, sizeof o);
+  cpu::resolve_outline(o, &entered[0][0], 4, w, h, o);
+  EXPECT_FLOAT_EQ(o[2], 1.0f);
+  EXPECT_FLOAT_EQ(o[0], 0.500f);
 }
 
 }  // namespace

@@ -260,9 +260,15 @@ def settle_reference(uv, hidden, back_albedo):
                        for q in near):
                 continue
             i, j = int(np.floor(u * f32(w))), int(np.floor(v * f32(h)))
-            if any(q[3] == entered for q in near) and back_albedo[j, i, 3] > 0:
+            # the hit's back surface, else that of the first entered neighbour
+            # (rows up, then along) whose texel has one
+            backs = [(i, j)] + [(int(np.floor(q[0] * f32(w))), int(np.floor(q[1] * f32(h))))
+                                for q in near if q[3] == entered]
+            backs = [(bi, bj) for bi, bj in backs if 0 <= bi < w and 0 <= bj < h and back_albedo[bj, bi, 3] > 0]
+            if any(q[3] == entered for q in near) and backs:
+                bi, bj = backs[0]
                 share = fade - vis
-                hid_out[y, x, :3] = back_albedo[j, i, :3] * (share / fade)
+                hid_out[y, x, :3] = back_albedo[bj, bi, :3] * (share / fade)
                 hid_out[y, x, 3] = share
             else:
                 uv_out[y, x, 2] = uv_out[y, x, 3] = fade
@@ -310,6 +316,18 @@ def test_uncertain_shares_go_to_the_hidden_side_or_the_hit():
             before[3, 4, 2:] = np.float32(0.5 / h) / np.float32(0.075)
         uv, hid, count = glint_core.settle_uncertain_shares(before, zeros, albedo)
         assert count == 0 and np.array_equal(uv, before) and not hid.any(), case
+    # A rim texel the back layer does not cover: the albedo of the texel the
+    # hidden side's ray entered.
+    rim = block(tag=entered)
+    rim[2, 3, :2] = ((6 + 0.5) / w, (1 + 0.5) / h)
+    bare = albedo.copy()
+    bare[3, 4] = 0.0
+    bare[1, 6] = (0.2, 0.4, 0.6, 1.0)
+    uv, hid, count = glint_core.settle_uncertain_shares(rim, zeros, bare)
+    assert count == 1 and np.allclose(hid[3, 4], (0.08, 0.16, 0.24, 0.4))
+    want_uv, want_hid = settle_reference(rim, zeros, bare)
+    uv, hid, _ = glint_core.settle_uncertain_shares(rim, zeros, bare)
+    assert np.array_equal(uv, want_uv) and np.array_equal(hid, want_hid)
     for case in (block(tag=entered), block(), far_entered):
         want_uv, want_hid = settle_reference(case, zeros, albedo)
         uv, hid, _ = glint_core.settle_uncertain_shares(case, zeros, albedo)

@@ -687,18 +687,21 @@ def hidden_line_scores(w, h, backend="cpu", grid=4):
 
 
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
-def test_a_rims_uncertain_share_goes_to_the_hidden_side_behind_it(backend, request):
+def test_the_line_where_a_reflected_objects_hidden_side_begins_is_antialiased(backend, request):
     """The top of the README sample's sphere reflection: above a line the floor's
     rays meet the sphere's front, below it they pass under the front into the
-    underside no pixel shows. A rim hit the march was unsure of gives the rest of
-    its share to a hidden side beside it (settle_uncertain_shares()); that side
-    reports the texel its ray entered, often more than 3 texels from the rim,
-    and was not counted there, so the rest showed the sky. Each floor pixel's
-    (seen, hidden, open) shares are held to the exact ones (hidden_line_scores()):
-    summed L1 362.8 before at 480x270, 355.5 after."""
+    underside no pixel shows. At one ray a pixel that line was a staircase. Now a
+    pixel with a hit beside a hidden side entered is an outline pixel: its extra
+    rays' hits give its visibility, and composite_layers() gives the rest to the
+    hidden side (docs/hiz.md, *Antialiased outlines*). Each floor pixel's (seen,
+    hidden, open) shares are held to the exact ones (hidden_line_scores()). Before,
+    at this size (320x180, the sample's): L1 221.0 and the shares' horizontal
+    variation in the band 1.25x (seen) and 1.26x (hidden) the exact; after, 203.7,
+    1.12x and 1.02x."""
     if backend == "gl":
         request.getfixturevalue("gl")
-    l1, pixels, seen, hidden = hidden_line_scores(480, 270, backend)
+    l1, pixels, seen, hidden = hidden_line_scores(320, 180, backend)
     print(f"{backend}: L1 {l1:.1f} over {pixels} px; horizontal variation in the band "
           f"{seen:.2f}x (seen), {hidden:.2f}x (hidden) the exact")
-    assert l1 < 359.0
+    assert l1 < 212.0
+    assert seen < 1.18 and hidden < 1.12

@@ -93,7 +93,8 @@ Image hidden_sides(const Image& traced_uv, const Image& back_albedo, uint64_t& c
 // distance: it reports the texel its ray entered, texels behind the rim) lies
 // inside its reflection, so its ray cannot have passed into the open: where a neighbour
 // came in by the object's hidden side (and the hit's texel has a back
-// surface), the rest of the fade goes to that side, in `hidden` as
+// surface, or else the texel that neighbour entered), the rest of the fade
+// goes to that side, in `hidden` as
 // (albedo x share / fade, share): a compositor weighs the hidden colour by the
 // pixel's whole replaced share (vis + share = fade), so the albedo is scaled
 // to its part; elsewhere the hit takes the whole fade. `uv` is the trace's

@@ -12,7 +12,7 @@
 // The host resets count to 0 before hiz_outline_find.comp.
 layout(std430, binding = 1) buffer HizOutline {
   uint count;
-  uint outline_pixel[];  // x | y << 16, in no particular order
+  uint outline_pixel[];  // x | y << 16 | BESIDE_HIDDEN_BIT, in no particular order
 };
 
 // Sample j of the batch's listed pixel i at u_per_pixel * i + j.
@@ -36,14 +36,27 @@ uint invocation_index() {
   return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * OUTLINE_GROUP + gl_LocalInvocationID.x;
 }
 
-ivec2 unpack_pixel(uint p) { return ivec2(int(p & 0xffffu), int(p >> 16)); }
+// Set on a listed pixel that or one of whose 4-neighbours entered a hidden
+// side (resolve_outline()'s one_hit_uv). Free: GL_MAX_TEXTURE_SIZE is at most
+// 32768, so y < 2^15.
+const uint BESIDE_HIDDEN_BIT = 0x80000000u;
+ivec2 unpack_pixel(uint p) { return ivec2(int(p & 0xffffu), int((p >> 16) & 0x7fffu)); }
 
 // report_of() in native/src/cpu/outline.h: a hit (visibility in the fourth channel), a
-// plain miss, or anything else (a blocked ray's occluder), left as it is.
+// plain miss, a hidden side entered (ENTERED_HIDDEN), or anything else (an
+// occluder found late), left as it is.
 const int REPORT_MISS = 0;
 const int REPORT_HIT = 1;
 const int REPORT_OTHER = 2;
+const int REPORT_ENTERED = 3;
 int report_of(vec4 o) {
   if (o.w > 0.0) return REPORT_HIT;
+  if (o.w == ENTERED_HIDDEN) return REPORT_ENTERED;
   return o.z == 0.0 && o.w == 0.0 ? REPORT_MISS : REPORT_OTHER;
+}
+
+// opposite_reports() in native/src/cpu/outline.h: a hit against a miss or a
+// hidden side entered, the pairs a pixel's rays can resolve.
+bool opposite_reports(int a, int b) {
+  return a == REPORT_HIT ? (b == REPORT_MISS || b == REPORT_ENTERED) : (b == REPORT_HIT && a != REPORT_OTHER);
 }

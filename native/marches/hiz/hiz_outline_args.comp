@@ -5,6 +5,7 @@
 // sample), then hiz_outline_resolve.comp's (one per listed pixel), each a
 // row of at most 65535 groups and as many rows as that takes, as
 // hiz_rays_args.comp sizes the reuse of rays'.
+#include "common.glsl"
 #include "hiz_outline.glsl"
 
 layout(local_size_x = 1) in;

@@ -3,7 +3,7 @@
 // native/src/cpu/outline.cpp, same tests on the same values): every pixel of the traced
 // frame, the outline's appended to hiz_outline.glsl's list. A pixel is on a
 // reflection's outline when its report is a hit and a neighbour's on the
-// same surface a miss, or the other way round. The reports are compared
+// same surface a miss or a hidden side entered, or the other way round. The reports are compared
 // first, so most pixels never read the G-buffer. A pixel whose reflection
 // the cone blur spreads over more than a pixel there is not listed (the
 // blur smooths that edge already). Rows of 64 pixels per group, as
@@ -41,11 +41,10 @@ bool same_surface(vec4 p, vec3 n, ivec2 q) {
   return d > 0.0 && dd >= need;
 }
 
-// Neighbour q is in the frame and reports a hit or a miss other than r.
+// Neighbour q is in the frame and its report is opposite to r.
 bool differs(ivec2 q, int r) {
   if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) return false;
-  int rq = report_of(imageLoad(u_out, q));
-  return rq != REPORT_OTHER && rq != r;
+  return opposite_reports(r, report_of(imageLoad(u_out, q)));
 }
 
 // cone_lod_at() > 0 (glint/material.h, as cone_blur.frag computes it): the
@@ -88,9 +87,17 @@ bool on_outline(ivec2 c) {
          sharp_pair(c, own, r, p, n, s, d2, q2) || sharp_pair(c, own, r, p, n, s, d3, q3);
 }
 
+// The pixel or a 4-neighbour in the frame entered a hidden side.
+bool entered_at(ivec2 q) {
+  if (q.x < 0 || q.y < 0 || q.x >= int(u_size.x) || q.y >= int(u_size.y)) return false;
+  return report_of(imageLoad(u_out, q)) == REPORT_ENTERED;
+}
+
 void main() {
   ivec2 c = ivec2(gl_GlobalInvocationID.xy);
   if (c.x >= int(u_size.x) || c.y >= int(u_size.y)) return;
   if (!on_outline(c)) return;
-  outline_pixel[atomicAdd(count, 1u)] = uint(c.x) | uint(c.y) << 16;
+  bool beside = entered_at(c) || entered_at(c - ivec2(1, 0)) || entered_at(c + ivec2(1, 0)) ||
+                entered_at(c - ivec2(0, 1)) || entered_at(c + ivec2(0, 1));
+  outline_pixel[atomicAdd(count, 1u)] = uint(c.x) | uint(c.y) << 16 | (beside ? BESIDE_HIDDEN_BIT : 0u);
 }

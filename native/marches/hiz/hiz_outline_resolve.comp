@@ -2,9 +2,10 @@
 // The hiz march's antialiased outlines, last pass (resolve_outline() in
 // native/src/cpu/outline.cpp, same operations in the same order): an invocation per
 // listed pixel of the batch (hiz_outline.glsl), its report in the frame
-// replaced by the box filter of its centre and its u_per_pixel samples. Only
-// where every hit lies within REUSE_PIXELS of the first and nothing but hits
-// and misses was reported; elsewhere the centre's report stays.
+// replaced by the box filter of its centre and its u_per_pixel samples, a
+// hidden side entered counting as no hit. Only where every hit lies within
+// REUSE_PIXELS of the first and nothing but hits and misses, or hits and
+// hidden sides, was reported; elsewhere the centre's report stays.
 #include "common.glsl"
 #include "hiz_outline.glsl"
 
@@ -14,10 +15,13 @@ layout(rgba32f, binding = 0) uniform image2D u_out;  // the traced frame, each l
 
 uniform vec2 u_size;  // float(width), float(height)
 
-// One report into the sums: false where it stops the filter.
-bool add(vec4 s, vec4 ref, inout float su, inout float sv, inout float sw) {
+// One report into the sums: false where it stops the filter (a miss and a
+// hidden side both seen: the share the hits leave has no one owner).
+bool add(vec4 s, vec4 ref, inout float su, inout float sv, inout float sw, inout bool miss, inout bool entered) {
   int r = report_of(s);
-  if (r != REPORT_HIT) return r == REPORT_MISS;
+  miss = miss || r == REPORT_MISS;
+  entered = entered || r == REPORT_ENTERED;
+  if (r != REPORT_HIT) return (r == REPORT_MISS || r == REPORT_ENTERED) && !(miss && entered);
   precise float du = (s.x - ref.x) * u_size.x;
   precise float dv = (s.y - ref.y) * u_size.y;
   precise float dist2 = du * du + dv * dv;
@@ -34,7 +38,8 @@ bool add(vec4 s, vec4 ref, inout float su, inout float sv, inout float sw) {
 void main() {
   uint i = invocation_index();
   if (i >= batch_pixels()) return;
-  ivec2 c = unpack_pixel(outline_pixel[uint(u_first) + i]);
+  uint listed = outline_pixel[uint(u_first) + i];
+  ivec2 c = unpack_pixel(listed);
   uint base = i * uint(u_per_pixel);
   vec4 centre = imageLoad(u_out, c);
   // The first hit, the centre's before the samples'.
@@ -49,11 +54,14 @@ void main() {
   }
   if (!found) return;
   float su = 0.0, sv = 0.0, sw = 0.0;
-  if (!add(centre, ref, su, sv, sw)) return;
+  bool miss = false, entered = false;
+  if (!add(centre, ref, su, sv, sw, miss, entered)) return;
   for (int j = 0; j < u_per_pixel; ++j)
-    if (!add(sample_report[base + uint(j)], ref, su, sv, sw)) return;
+    if (!add(sample_report[base + uint(j)], ref, su, sv, sw, miss, entered)) return;
   precise float vis = sw / float(u_per_pixel + 1);
   precise float ou = su / sw;
   precise float ov = sv / sw;
-  imageStore(u_out, c, vec4(ou, ov, vis, vis));
+  // Beside a hidden side, one hit's uv (resolve_outline() says why).
+  bool one = (listed & BESIDE_HIDDEN_BIT) != 0u || entered;
+  imageStore(u_out, c, vec4(one ? ref.x : ou, one ? ref.y : ov, vis, vis));
 }

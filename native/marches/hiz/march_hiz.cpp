@@ -807,7 +807,8 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
   // The outlines: found on the whole frame first, then each row's samples
   // walked and resolved (a row writes only its own pixels, which no other
   // row reads by then).
-  const std::vector<std::vector<int>> edges = outline_pixels(in, out, threads);
+  std::vector<std::vector<unsigned char>> beside_hidden;
+  const std::vector<std::vector<int>> edges = outline_pixels(in, out, threads, &beside_hidden);
   const int k = std::min(opt.antialias, 4);
   const float w = static_cast<float>(out.width), h = static_cast<float>(out.height);
   parallel_rows(0, out.height, threads, [&](int y) {
@@ -828,7 +829,7 @@ Image trace_hiz(const TraceInputs& in, const TraceOptions& opt, int threads, Wal
     hiz_walk(walk, host, budget, isa);
     for (size_t e = 0; e < row.size(); ++e) {
       float* o = out.px(row[e], y);
-      resolve_outline(o, samples.data() + e * static_cast<size_t>(k) * 4, k, w, h, o);
+      resolve_outline(o, samples.data() + e * static_cast<size_t>(k) * 4, k, w, h, o, beside_hidden[y][e] != 0);
     }
   });
   return out;
