@@ -208,6 +208,11 @@ void antialias_outlines(GlState& s, HizObjects& o, GLuint walk, const TraceOptio
   // and the list cannot be cut without losing pixels: refused past the
   // limit, as ray_list() refuses its list.
   const size_t list_bytes = (1 + pixels) * sizeof(GLuint);
+  // A listed pixel packs x in 16 bits, y in 15 and a flag in the last
+  // (hiz_outline.glsl): no OpenGL today allows a texture 32768 high.
+  if (w > 65535 || h > 32767)
+    throw Error("glint GL: " + size_text(w, h) + " is too large for the hiz march's antialiased outlines "
+                "(at most 65535x32767). Use antialias=0 or backend=\"cpu\" for this size.");
   if (limit > 0 && list_bytes > limit)
     throw Error("glint GL: " + size_text(w, h) + " is too large for the hiz march's antialiased outlines on " +
                 s.info().renderer + ": their list of pixels needs " + mib(double(list_bytes)) +
