@@ -549,6 +549,25 @@ def mirror_floor_scene(kind: str = "persp", shift=(0.0, 0.0), sphere=True, box=T
     return Scene(objs, cam)
 
 
+def reflection_shares(scene: Scene, width: int, height: int, max_distance: float, grid: int = 4,
+                      target: Optional[int] = None):
+    """The exact shares of each pixel's reflection over a grid x grid lattice of
+    sub-pixel rays (a render at ``grid`` times the size): ``seen``, the share whose
+    mirror hit is visible, and ``unseen``, the share that hits a surface the camera
+    does not see there (a hidden side, or off the screen); only hits on object
+    ``target`` when given. Also ``objects`` [height, grid, width, grid]: what each
+    sub-pixel ray starts on."""
+    hi = render(scene, width * grid, height * grid)
+    hits = mirror_hits(scene, hi, max_distance, incident="view")
+    on = hits["hit"] if target is None else hits["hit"] & (hits["object"] == target)
+
+    def share(mask):
+        return mask.reshape(height, grid, width, grid).mean(axis=(1, 3))
+
+    objects = hi["object"].reshape(height, grid, width, grid)
+    return share(on & hits["visible"]), share(on & ~hits["visible"]), objects
+
+
 def reflection_coverage(scene: Scene, gbuf: dict, max_distance: float, grid: int = 4):
     """The exact coverage of each pixel's reflection, what an antialiased frame shows:
     the share of a grid x grid lattice of sub-pixel rays (a render at ``grid`` times
@@ -556,10 +575,8 @@ def reflection_coverage(scene: Scene, gbuf: dict, max_distance: float, grid: int
     marks the pixels whose sub-pixel rays all start on the pixel's own object, where
     the coverage is the reflection's alone and not the reflector's own outline."""
     h, w = gbuf["object"].shape
-    hi = render(scene, w * grid, h * grid)
-    visible = mirror_hits(scene, hi, max_distance, incident="view")["visible"]
-    coverage = visible.reshape(h, grid, w, grid).mean(axis=(1, 3))
-    whole = (hi["object"].reshape(h, grid, w, grid) == gbuf["object"][:, None, :, None]).all(axis=(1, 3))
+    coverage, _, objects = reflection_shares(scene, w, h, max_distance, grid)
+    whole = (objects == gbuf["object"][:, None, :, None]).all(axis=(1, 3))
     return coverage, whole
 
 

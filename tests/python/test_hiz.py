@@ -664,16 +664,10 @@ def hidden_line_scores(w, h, backend="cpu", grid=4):
                                       blocked="occluder", backend=backend, **glint_core.presets()["balanced"])
     seen = out["uv"][..., 2]
     hidden = np.where(out["hidden"][..., 3] > 0, np.maximum(out["uv"][..., 3] - seen, 0.0), 0.0)
-    sc = _floating_ball_scene()
-    fine = A.render(sc, w * grid, h * grid)
-    exact = A.mirror_hits(sc, fine, 15.0, incident="view")
-    on_ball = exact["hit"] & (exact["object"] == 1)
-
-    def pool(a):
-        return a.astype(float).reshape(h, grid, w, grid).mean(axis=(1, 3))
-
-    seen_x, hidden_x = pool(on_ball & exact["visible"]), pool(on_ball & ~exact["visible"])
-    floor = pool(fine["object"] == 0) == 1.0
+    # The sphere (object 1) is whole on screen: what a ray meets of it unseen is
+    # its hidden side.
+    seen_x, hidden_x, objects = A.reflection_shares(_floating_ball_scene(), w, h, 15.0, grid, target=1)
+    floor = (objects == 0).all(axis=(1, 3))
     area = floor & ((seen_x + hidden_x > 0) | (seen + hidden > 0))
     l1 = (np.abs(seen - seen_x) + np.abs(hidden - hidden_x)
           + np.abs((1 - seen - hidden) - (1 - seen_x - hidden_x)))[area].sum()
